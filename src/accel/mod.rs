@@ -1,0 +1,4 @@
+//! Acceleration structures: a bounding volume hierarchy over all primitives.
+
+pub mod bvh;
+pub use bvh::Bvh;

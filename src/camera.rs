@@ -1,0 +1,156 @@
+//! Cameras. Both kinds reduce to one model, the course's: an eye point and an image plane
+//! spanned by its corners. Pixel (x, y) with x to the right and y down covers the part of the
+//! plane between (x/W, y/H) and ((x+1)/W, (y+1)/H); a ray leaves the eye through a uniformly
+//! chosen point of that square (a box filter).
+//!
+//! The look-at camera (Mitsuba's `perspective`) places the plane at distance 1 in front of the
+//! eye, sized by the field of view along the chosen axis.
+
+use crate::geometry::Ray;
+use glam::{Vec2, Vec3, Vec3A};
+
+/// Which image axis a perspective camera's field of view spans (Mitsuba's `fov_axis`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FovAxis {
+    X,
+    Y,
+    Diagonal,
+    Smaller,
+    Larger,
+}
+
+impl FovAxis {
+    pub fn parse(s: &str) -> Option<FovAxis> {
+        Some(match s {
+            "x" => FovAxis::X,
+            "y" => FovAxis::Y,
+            "diagonal" => FovAxis::Diagonal,
+            "smaller" => FovAxis::Smaller,
+            "larger" => FovAxis::Larger,
+            _ => return None,
+        })
+    }
+}
+
+/// A camera as a scene describes it; the image plane of a perspective camera depends on the
+/// image's aspect ratio, which flags may change, so it is resolved at render time.
+#[derive(Clone, Debug)]
+pub enum CameraDesc {
+    /// The course's camera: eye point and the image plane's corners.
+    Pinhole {
+        eye: Vec3,
+        top_left: Vec3,
+        top_right: Vec3,
+        bottom_left: Vec3,
+        bottom_right: Option<Vec3>,
+    },
+    /// Look-at camera with a field of view in degrees.
+    Perspective {
+        origin: Vec3,
+        target: Vec3,
+        up: Vec3,
+        fov: f32,
+        fov_axis: FovAxis,
+    },
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct Camera {
+    eye: Vec3A,
+    tl: Vec3A,
+    /// top_right − top_left
+    right: Vec3A,
+    /// bottom_left − top_left
+    down: Vec3A,
+    /// Bilinear twist: bottom_right − bottom_left − right (zero for a parallelogram).
+    twist: Vec3A,
+    width: u32,
+    height: u32,
+}
+
+impl CameraDesc {
+    pub fn build(&self, width: u32, height: u32) -> Camera {
+        let (eye, tl, tr, bl, br) = match *self {
+            CameraDesc::Pinhole {
+                eye,
+                top_left,
+                top_right,
+                bottom_left,
+                bottom_right,
+            } => {
+                let br = bottom_right.unwrap_or(top_right + bottom_left - top_left);
+                (eye, top_left, top_right, bottom_left, br)
+            }
+            CameraDesc::Perspective {
+                origin,
+                target,
+                up,
+                fov,
+                fov_axis,
+            } => {
+                let fwd = (target - origin).normalize();
+                let right = fwd.cross(up).normalize();
+                let up = right.cross(fwd);
+                let aspect = width as f32 / height as f32;
+                let t = (fov.to_radians() * 0.5).tan();
+                // Half extents (hx, hy) of the plane at distance 1.
+                let (hx, hy) = match fov_axis {
+                    FovAxis::X => (t, t / aspect),
+                    FovAxis::Y => (t * aspect, t),
+                    FovAxis::Diagonal => {
+                        let d = (aspect * aspect + 1.0).sqrt();
+                        (t * aspect / d, t / d)
+                    }
+                    FovAxis::Smaller if aspect >= 1.0 => (t * aspect, t),
+                    FovAxis::Smaller => (t, t / aspect),
+                    FovAxis::Larger if aspect >= 1.0 => (t, t / aspect),
+                    FovAxis::Larger => (t * aspect, t),
+                };
+                let c = origin + fwd;
+                let tl = c - right * hx + up * hy;
+                let tr = c + right * hx + up * hy;
+                let bl = c - right * hx - up * hy;
+                let br = c + right * hx - up * hy;
+                (origin, tl, tr, bl, br)
+            }
+        };
+        let (tl, tr, bl, br) = (
+            Vec3A::from(tl),
+            Vec3A::from(tr),
+            Vec3A::from(bl),
+            Vec3A::from(br),
+        );
+        let right = tr - tl;
+        let down = bl - tl;
+        Camera {
+            eye: eye.into(),
+            tl,
+            right,
+            down,
+            twist: br - bl - right,
+            width,
+            height,
+        }
+    }
+}
+
+impl Camera {
+    /// The point of the image plane at film coordinates (s, t) in [0,1]², s right, t down.
+    #[inline]
+    pub fn plane_point(&self, s: f32, t: f32) -> Vec3A {
+        self.tl + self.right * s + self.down * t + self.twist * (s * t)
+    }
+
+    /// Ray through pixel (x, y) at offset `u` in [0,1)² inside the pixel.
+    #[inline]
+    pub fn generate_ray(&self, x: u32, y: u32, u: Vec2) -> Ray {
+        let s = (x as f32 + u.x) / self.width as f32;
+        let t = (y as f32 + u.y) / self.height as f32;
+        let p = self.plane_point(s, t);
+        Ray::new(self.eye, (p - self.eye).normalize())
+    }
+
+    pub fn eye(&self) -> Vec3A {
+        self.eye
+    }
+}

@@ -1,0 +1,257 @@
+//! Images in memory and on disk: linear RGB, written as OpenEXR (linear half or float) or as
+//! 8-bit sRGB PNG after exposure and a tone map. Files are written to a temporary name in the
+//! same directory and renamed, so no half-written image ever stands at the output path.
+
+use crate::Color;
+use std::path::{Path, PathBuf};
+
+#[derive(Clone, Debug)]
+pub struct Image {
+    pub width: u32,
+    pub height: u32,
+    /// Row-major, top row first, linear RGB.
+    pub pixels: Vec<Color>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ToneMap {
+    /// Clamp to [0, 1].
+    #[default]
+    Clamp,
+    /// Reinhard, L/(1 + L) per channel.
+    Reinhard,
+    /// Narkowicz's fit of the ACES filmic curve ("ACES Filmic Tone Mapping Curve", 2016).
+    Aces,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct WriteOptions {
+    /// Exposure in stops: pixel values are multiplied by 2^exposure before tone mapping
+    /// (PNG only).
+    pub exposure: f32,
+    pub tonemap: ToneMap,
+    /// Write EXR as 16-bit half floats instead of 32-bit floats.
+    pub half: bool,
+}
+
+impl Default for WriteOptions {
+    fn default() -> Self {
+        WriteOptions {
+            exposure: 0.0,
+            tonemap: ToneMap::Clamp,
+            half: false,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    Png,
+    Exr,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ImageError {
+    #[error("{path}: unsupported image format (use a .png or .exr file name)")]
+    UnknownFormat { path: PathBuf },
+    #[error("{path}: the directory {dir} does not exist")]
+    NoDirectory { path: PathBuf, dir: PathBuf },
+    #[error("{path}: cannot write here: {source}")]
+    NotWritable {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}: {message}")]
+    Io { path: PathBuf, message: String },
+}
+
+impl Format {
+    pub fn from_path(path: &Path) -> Result<Format, ImageError> {
+        match path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase())
+            .as_deref()
+        {
+            Some("png") => Ok(Format::Png),
+            Some("exr") => Ok(Format::Exr),
+            _ => Err(ImageError::UnknownFormat {
+                path: path.to_path_buf(),
+            }),
+        }
+    }
+}
+
+impl Image {
+    pub fn new(width: u32, height: u32) -> Image {
+        Image {
+            width,
+            height,
+            pixels: vec![Color::ZERO; width as usize * height as usize],
+        }
+    }
+
+    #[inline]
+    pub fn get(&self, x: u32, y: u32) -> Color {
+        self.pixels[(y * self.width + x) as usize]
+    }
+
+    /// Mean over the block of `bs`×`bs` pixels at block coordinates (bx, by), in f64.
+    pub fn block_mean(&self, bx: u32, by: u32, bs: u32) -> [f64; 3] {
+        let mut s = [0.0f64; 3];
+        for y in by * bs..((by + 1) * bs).min(self.height) {
+            for x in bx * bs..((bx + 1) * bs).min(self.width) {
+                let p = self.get(x, y);
+                for c in 0..3 {
+                    s[c] += p[c] as f64;
+                }
+            }
+        }
+        let n = (bs * bs) as f64;
+        s.map(|v| v / n)
+    }
+
+    /// 8-bit sRGB bytes after exposure and tone mapping.
+    pub fn to_srgb8(&self, opts: &WriteOptions) -> Vec<u8> {
+        let scale = 2f32.powf(opts.exposure);
+        let mut out = Vec::with_capacity(self.pixels.len() * 3);
+        for p in &self.pixels {
+            let v = *p * scale;
+            let t = match opts.tonemap {
+                ToneMap::Clamp => v,
+                ToneMap::Reinhard => v / (Color::ONE + v.max(Color::ZERO)),
+                ToneMap::Aces => {
+                    let (a, b, c, d, e) = (2.51, 0.03, 2.43, 0.59, 0.14);
+                    let v = v.max(Color::ZERO);
+                    (v * (a * v + b)) / (v * (c * v + d) + e)
+                }
+            };
+            for ch in 0..3 {
+                out.push((linear_to_srgb(t[ch]) * 255.0 + 0.5) as u8);
+            }
+        }
+        out
+    }
+}
+
+/// The sRGB transfer function (IEC 61966-2-1), on [0, 1] after clamping; NaN maps to 0.
+#[inline]
+pub fn linear_to_srgb(v: f32) -> f32 {
+    let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+    if v <= 0.003_130_8 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Checks, before a long render, that an image can be written at `path`: the format is known,
+/// the directory exists and a file can be created in it.
+pub fn check_output_path(path: &Path) -> Result<Format, ImageError> {
+    let format = Format::from_path(path)?;
+    let dir = parent_dir(path);
+    if !dir.is_dir() {
+        return Err(ImageError::NoDirectory {
+            path: path.to_path_buf(),
+            dir,
+        });
+    }
+    let probe = temp_path(path);
+    match std::fs::File::create(&probe) {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(format)
+        }
+        Err(source) => Err(ImageError::NotWritable {
+            path: path.to_path_buf(),
+            source,
+        }),
+    }
+}
+
+fn parent_dir(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+fn temp_path(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    parent_dir(path).join(format!(".{name}.{}.tmp", std::process::id()))
+}
+
+/// Writes the image in the format the extension names, atomically (temporary file + rename).
+pub fn write_image(path: &Path, img: &Image, opts: &WriteOptions) -> Result<(), ImageError> {
+    let format = Format::from_path(path)?;
+    let tmp = temp_path(path);
+    let io = |message: String| ImageError::Io {
+        path: path.to_path_buf(),
+        message,
+    };
+    let result = match format {
+        Format::Png => write_png(&tmp, img, opts),
+        Format::Exr => write_exr(&tmp, img, opts.half),
+    };
+    if let Err(message) = result {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(io(message));
+    }
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        io(e.to_string())
+    })
+}
+
+fn write_png(path: &Path, img: &Image, opts: &WriteOptions) -> Result<(), String> {
+    let file = std::fs::File::create(path).map_err(|e| e.to_string())?;
+    let w = std::io::BufWriter::new(file);
+    let mut enc = png::Encoder::new(w, img.width, img.height);
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+    let mut writer = enc.write_header().map_err(|e| e.to_string())?;
+    writer
+        .write_image_data(&img.to_srgb8(opts))
+        .map_err(|e| e.to_string())?;
+    writer.finish().map_err(|e| e.to_string())
+}
+
+fn write_exr(path: &Path, img: &Image, half: bool) -> Result<(), String> {
+    use exr::prelude::*;
+    let (w, h) = (img.width as usize, img.height as usize);
+    let get = |x: usize, y: usize| img.pixels[y * w + x];
+    let r = if half {
+        write_rgb_file(path, w, h, |x, y| {
+            let p = get(x, y);
+            (f16::from_f32(p.x), f16::from_f32(p.y), f16::from_f32(p.z))
+        })
+    } else {
+        write_rgb_file(path, w, h, |x, y| {
+            let p = get(x, y);
+            (p.x, p.y, p.z)
+        })
+    };
+    r.map_err(|e| e.to_string())
+}
+
+/// Reads the first RGB(A) layer of an OpenEXR file as linear RGB.
+pub fn read_exr(path: &Path) -> Result<Image, ImageError> {
+    use exr::prelude::*;
+    let img = read_first_rgba_layer_from_file(
+        path,
+        |res, _| self::Image::new(res.width() as u32, res.height() as u32),
+        |img: &mut self::Image, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            let i = pos.y() * img.width as usize + pos.x();
+            img.pixels[i] = Color::new(r, g, b);
+        },
+    )
+    .map_err(|e| ImageError::Io {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    Ok(img.layer_data.channel_data.pixels)
+}

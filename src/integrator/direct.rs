@@ -1,0 +1,79 @@
+//! Direct illumination: light emitted towards the camera plus one bounce of direct light at
+//! the first non-specular surface, following mirrors and glass on the way there (the TNCG15
+//! report's Figure 3.1). The direct light is estimated with shadow rays and one BSDF sample,
+//! combined by MIS.
+
+use super::{emitted, sample_lights, IntegratorParams, RayStats};
+use crate::geometry::{Frame, Ray};
+use crate::material::TransportMode;
+use crate::sampler::Sampler;
+use crate::scene::Scene;
+use crate::Color;
+
+/// Specular bounces followed before giving up (a ray trapped by total internal reflection).
+const MAX_SPECULAR_CHAIN: u32 = 64;
+
+pub fn li(
+    scene: &Scene,
+    mut ray: Ray,
+    sampler: &mut Sampler,
+    p: &IntegratorParams,
+    stats: &mut RayStats,
+) -> Color {
+    let mut l = Color::ZERO;
+    let mut beta = Color::ONE;
+    let max_depth = p.max_depth.unwrap_or(u32::MAX);
+    let mut depth = 0u32;
+    loop {
+        stats.rays += 1;
+        let Some(si) = scene.intersect(&ray) else {
+            break;
+        };
+        l += beta * emitted(scene, &si, ray.d, None, p.shadow_rays);
+        if depth + 1 >= max_depth || depth >= MAX_SPECULAR_CHAIN {
+            break;
+        }
+        let material = &scene.materials[si.material as usize];
+        if material.is_black() {
+            break;
+        }
+        let frame = Frame::from_normal(si.ns);
+        let wo = frame.to_local(-ray.d);
+        let u1 = sampler.next_1d();
+        let u2 = sampler.next_2d();
+        if material.is_specular() {
+            let Some(bs) = material.sample(wo, u1, u2, TransportMode::Radiance) else {
+                break;
+            };
+            beta *= bs.weight;
+            ray = si.spawn_ray(frame.to_world(bs.wi));
+            depth += 1;
+            continue;
+        }
+        // The first non-specular surface: light sampling plus one BSDF sample, by MIS.
+        if !scene.lights.is_empty() {
+            l += beta
+                * sample_lights(
+                    scene,
+                    &si,
+                    &frame,
+                    wo,
+                    material,
+                    p.shadow_rays,
+                    sampler,
+                    stats,
+                );
+        }
+        if let Some(bs) = material.sample(wo, u1, u2, TransportMode::Radiance) {
+            let ray2 = si.spawn_ray(frame.to_world(bs.wi));
+            stats.rays += 1;
+            if let Some(si2) = scene.intersect(&ray2) {
+                l += beta
+                    * bs.weight
+                    * emitted(scene, &si2, ray2.d, Some((si.p, bs.pdf)), p.shadow_rays);
+            }
+        }
+        break;
+    }
+    l
+}

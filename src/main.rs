@@ -1,0 +1,198 @@
+//! The `mcrt` command line: parses flags and calls the library.
+
+use clap::{Parser, Subcommand, ValueEnum};
+use indicatif::{ProgressBar, ProgressStyle};
+use mcrt::image::{check_output_path, write_image, ToneMap, WriteOptions};
+use mcrt::integrator::IntegratorKind;
+use mcrt::scene::desc::FileSettings;
+use mcrt::scene::Scene;
+use mcrt::Error;
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(Parser)]
+#[command(name = "mcrt", version, about = "A physically based Monte Carlo ray tracer", long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene to an image (.png: 8-bit sRGB, tone mapped; .exr: linear RGB).
+    Render(RenderArgs),
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum IntegratorArg {
+    /// Path tracing with next-event estimation, MIS and Russian roulette.
+    Path,
+    /// Emission plus one bounce of direct light, through mirrors and glass.
+    Direct,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum ToneMapArg {
+    Clamp,
+    Reinhard,
+    Aces,
+}
+
+#[derive(clap::Args)]
+struct RenderArgs {
+    /// Scene file (.toml, mcrt's format: see docs/scene-format.md).
+    scene: PathBuf,
+    /// Output image; the extension picks the format (.png or .exr). Default: SCENE's name with .png.
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    /// Samples per pixel.
+    #[arg(long)]
+    spp: Option<u32>,
+    /// Image width in pixels.
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height in pixels.
+    #[arg(long)]
+    height: Option<u32>,
+    /// Seed of the random streams: the same seed and spp give the same image.
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Worker threads (default: one per core). The image does not depend on it.
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Integrator.
+    #[arg(long, value_enum)]
+    integrator: Option<IntegratorArg>,
+    /// Shadow rays per non-specular path vertex.
+    #[arg(long)]
+    shadow_rays: Option<u32>,
+    /// Fixed Russian-roulette survival probability P (1/(1-P) bounces on average); by default
+    /// the survival probability follows the path throughput.
+    #[arg(long, value_name = "P")]
+    rr_survival: Option<f32>,
+    /// Longest path in segments (1: emitters seen directly, 2: direct light, ...); -1 or
+    /// absent: unlimited.
+    #[arg(long, allow_negative_numbers = true)]
+    max_depth: Option<i64>,
+    /// Camera to render, by name (default: the scene's, else its first).
+    #[arg(long)]
+    camera: Option<String>,
+    /// Exposure in stops for PNG output (pixel values times 2^EV).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
+    /// Tone map for PNG output.
+    #[arg(long, value_enum, default_value = "clamp")]
+    tonemap: ToneMapArg,
+    /// Write EXR as 16-bit half floats.
+    #[arg(long)]
+    half: bool,
+    /// No progress bar and no summary line.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(args) => render(args),
+    };
+    if let Err(e) = result {
+        eprintln!("error: {e}");
+        std::process::exit(e.exit_code());
+    }
+}
+
+fn render(a: RenderArgs) -> Result<(), Error> {
+    let output = a.output.clone().unwrap_or_else(|| {
+        PathBuf::from(a.scene.file_stem().unwrap_or_default()).with_extension("png")
+    });
+    // Fail on a bad output path now, not after a long render.
+    check_output_path(&output)?;
+    let max_depth = match a.max_depth {
+        None | Some(-1) => None,
+        Some(d) if d >= 0 && d <= u32::MAX as i64 => Some(d as u32),
+        Some(d) => {
+            return Err(Error::Usage(format!(
+                "--max-depth must be -1 (unlimited) or at least 0, got {d}"
+            )))
+        }
+    };
+    if a.threads == Some(0) {
+        return Err(Error::Usage("--threads must be at least 1".into()));
+    }
+    let t_load = Instant::now();
+    let desc = mcrt::load_scene(&a.scene)?;
+    let over = FileSettings {
+        width: a.width,
+        height: a.height,
+        spp: a.spp,
+        seed: a.seed,
+        integrator: a.integrator.map(|i| match i {
+            IntegratorArg::Path => IntegratorKind::Path,
+            IntegratorArg::Direct => IntegratorKind::Direct,
+        }),
+        max_depth,
+        shadow_rays: a.shadow_rays,
+        rr_survival: a.rr_survival,
+        camera: a.camera.clone(),
+    };
+    // With --max-depth -1 the flag must also override a limit in the file.
+    let mut file_settings = desc.settings.clone();
+    if a.max_depth == Some(-1) {
+        file_settings.max_depth = None;
+    }
+    let settings = mcrt::resolve_settings(&file_settings, &over, a.threads)?;
+    let scene = Scene::build(desc);
+    let load_time = t_load.elapsed();
+
+    let total = settings.width as u64 * settings.height as u64 * settings.spp as u64;
+    let show = !a.quiet && std::io::stderr().is_terminal();
+    let bar = if show {
+        let b = ProgressBar::new(total);
+        b.set_style(
+            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}%  {human_pos}/{human_len} samples  {per_sec}  ETA {eta}")
+                .unwrap(),
+        );
+        b
+    } else {
+        ProgressBar::hidden()
+    };
+    let (film, stats) = mcrt::render::render(&scene, &settings, &|n| bar.inc(n))?;
+    bar.finish_and_clear();
+
+    let opts = WriteOptions {
+        exposure: a.exposure,
+        tonemap: match a.tonemap {
+            ToneMapArg::Clamp => ToneMap::Clamp,
+            ToneMapArg::Reinhard => ToneMap::Reinhard,
+            ToneMapArg::Aces => ToneMap::Aces,
+        },
+        half: a.half,
+    };
+    write_image(&output, &film.image(), &opts)?;
+    if !a.quiet {
+        let secs = stats.elapsed.as_secs_f64().max(1e-9);
+        let rays = stats.rays.rays + stats.rays.shadow_rays;
+        eprintln!(
+            "{}: {}x{} at {} spp ({}, {} primitives, {} lights, loaded in {:.2} s) in {:.2} s: {:.2} M samples/s, {:.2} M rays/s ({:.2} M shadow rays/s)",
+            output.display(),
+            settings.width,
+            settings.height,
+            settings.spp,
+            settings.params.kind.name(),
+            scene.prims.len(),
+            scene.lights.lights.len(),
+            load_time.as_secs_f64(),
+            secs,
+            stats.samples as f64 / secs / 1e6,
+            rays as f64 / secs / 1e6,
+            stats.rays.shadow_rays as f64 / secs / 1e6,
+        );
+        if stats.dropped > 0 {
+            let (x, y) = stats.first_dropped.unwrap_or_default();
+            eprintln!("warning: {} samples were NaN or infinite and were dropped (first at pixel {x}, {y})", stats.dropped);
+        }
+    }
+    Ok(())
+}

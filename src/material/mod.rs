@@ -1,0 +1,150 @@
+//! Materials and their BSDFs.
+//!
+//! A closed enum, matched in the integrators' inner loops (no dynamic dispatch). All BSDFs
+//! work in the local shading frame: z is the shading normal, `wo` points towards the viewer
+//! (or the previous vertex) and `wi` towards the light; both are unit vectors.
+
+pub mod dielectric;
+pub mod lambert;
+pub mod mirror;
+pub mod oren_nayar;
+pub mod sampling;
+
+pub use dielectric::Dielectric;
+pub use lambert::Lambert;
+pub use mirror::Mirror;
+pub use oren_nayar::OrenNayar;
+
+use crate::Color;
+use glam::{Vec2, Vec3A};
+
+/// Whether a path carries radiance (from the camera) or importance (from the lights); only
+/// refraction treats the two differently.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TransportMode {
+    Radiance,
+    Importance,
+}
+
+/// The result of sampling a BSDF.
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfSample {
+    pub wi: Vec3A,
+    /// f(wo, wi)·|cos θi| / pdf: what the path throughput is multiplied by.
+    pub weight: Color,
+    /// Solid-angle pdf; 0 for delta (specular) samples.
+    pub pdf: f32,
+    pub specular: bool,
+    /// Relative index of refraction crossed (1 for reflection).
+    pub eta: f32,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub enum Bsdf {
+    Lambert(Lambert),
+    OrenNayar(OrenNayar),
+    Mirror(Mirror),
+    Dielectric(Dielectric),
+    /// Absorbs everything (the back of a light, a black body).
+    Black,
+}
+
+/// A BSDF and how it treats the back side of a surface.
+#[derive(Clone, Copy, Debug)]
+pub struct Material {
+    pub bsdf: Bsdf,
+    /// Reflective BSDFs on a one-sided material reflect nothing when seen from behind the
+    /// geometric normal (Mitsuba's convention); two-sided ones reflect alike on both sides
+    /// (pbrt's). Dielectrics have two sides by nature and ignore this.
+    pub two_sided: bool,
+}
+
+impl Material {
+    pub fn new(bsdf: Bsdf, two_sided: bool) -> Self {
+        Material { bsdf, two_sided }
+    }
+
+    /// True when every scattering is a delta (mirror, glass): no light sampling there.
+    #[inline]
+    pub fn is_specular(&self) -> bool {
+        matches!(self.bsdf, Bsdf::Mirror(_) | Bsdf::Dielectric(_))
+    }
+
+    #[inline]
+    pub fn is_black(&self) -> bool {
+        matches!(self.bsdf, Bsdf::Black)
+    }
+
+    /// For reflective BSDFs, maps a direction pair seen from the back into the front
+    /// hemisphere. Returns None when the one-sided surface is seen from behind.
+    #[inline]
+    fn orient(&self, wo: Vec3A) -> Option<f32> {
+        if matches!(self.bsdf, Bsdf::Dielectric(_)) {
+            return Some(1.0);
+        }
+        if wo.z > 0.0 {
+            Some(1.0)
+        } else if wo.z < 0.0 && self.two_sided {
+            Some(-1.0)
+        } else {
+            None
+        }
+    }
+
+    /// f(wo, wi), without the cosine. Zero for delta BSDFs.
+    #[inline]
+    pub fn eval(&self, wo: Vec3A, wi: Vec3A) -> Color {
+        let Some(s) = self.orient(wo) else {
+            return Color::ZERO;
+        };
+        let flip = Vec3A::new(1.0, 1.0, s);
+        let (wo, wi) = (wo * flip, wi * flip);
+        match &self.bsdf {
+            Bsdf::Lambert(b) => b.eval(wo, wi),
+            Bsdf::OrenNayar(b) => b.eval(wo, wi),
+            _ => Color::ZERO,
+        }
+    }
+
+    /// Solid-angle pdf of sampling `wi` given `wo`. Zero for delta BSDFs.
+    #[inline]
+    pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
+        let Some(s) = self.orient(wo) else { return 0.0 };
+        let flip = Vec3A::new(1.0, 1.0, s);
+        let (wo, wi) = (wo * flip, wi * flip);
+        match &self.bsdf {
+            Bsdf::Lambert(b) => b.pdf(wo, wi),
+            Bsdf::OrenNayar(b) => b.pdf(wo, wi),
+            _ => 0.0,
+        }
+    }
+
+    /// Samples wi. `u1` picks among lobes (reflection or refraction), `u2` the direction.
+    #[inline]
+    pub fn sample(&self, wo: Vec3A, u1: f32, u2: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+        let s = self.orient(wo)?;
+        let flip = Vec3A::new(1.0, 1.0, s);
+        let wo_f = wo * flip;
+        let mut bs = match &self.bsdf {
+            Bsdf::Lambert(b) => b.sample(wo_f, u2),
+            Bsdf::OrenNayar(b) => b.sample(wo_f, u2),
+            Bsdf::Mirror(b) => b.sample(wo_f),
+            Bsdf::Dielectric(b) => return b.sample(wo, u1, mode),
+            Bsdf::Black => None,
+        }?;
+        bs.wi *= flip;
+        Some(bs)
+    }
+
+    /// The directional-hemispherical reflectance at normal incidence, roughly: the colour a
+    /// denoiser or photon tracer takes as the surface's albedo.
+    pub fn albedo(&self) -> Color {
+        match &self.bsdf {
+            Bsdf::Lambert(b) => b.albedo,
+            Bsdf::OrenNayar(b) => b.albedo,
+            Bsdf::Mirror(b) => b.reflectance,
+            Bsdf::Dielectric(_) => Color::ONE,
+            Bsdf::Black => Color::ZERO,
+        }
+    }
+}

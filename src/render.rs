@@ -1,0 +1,145 @@
+//! The render loop: image tiles in parallel (rayon), each pixel's samples in order, each
+//! sample with its own random stream, so the image is the same on any number of threads.
+
+use crate::film::{Film, PixelSums};
+use crate::integrator::{self, IntegratorParams, RayStats};
+use crate::sampler::Sampler;
+use crate::scene::Scene;
+use rayon::prelude::*;
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+/// Tile edge in pixels: small enough to balance two to many cores, large enough that the
+/// per-tile bookkeeping vanishes.
+pub const TILE: u32 = 16;
+
+#[derive(Clone, Debug)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub seed: u64,
+    pub camera: Option<String>,
+    pub params: IntegratorParams,
+    /// Worker threads; None = one per core.
+    pub threads: Option<usize>,
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct RenderStats {
+    pub elapsed: Duration,
+    pub samples: u64,
+    pub rays: RayStats,
+    /// Samples that came out NaN or infinite and were dropped, and the first such pixel.
+    pub dropped: u64,
+    pub first_dropped: Option<(u32, u32)>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    #[error("no camera named '{0}' in the scene (it has: {1})")]
+    NoCamera(String, String),
+    #[error("the scene has no camera")]
+    NoCameras,
+    #[error("{0}")]
+    Threads(String),
+}
+
+/// Renders samples [first, first + count) of every pixel into `film`.
+pub fn render_samples(
+    scene: &Scene,
+    s: &RenderSettings,
+    film: &mut Film,
+    first: u32,
+    count: u32,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<RenderStats, RenderError> {
+    let cam_desc = match (&s.camera, scene.camera(s.camera.as_deref())) {
+        (_, Some(c)) => c,
+        (Some(name), None) => {
+            let names: Vec<&str> = scene.cameras.iter().map(|(n, _)| n.as_str()).collect();
+            return Err(RenderError::NoCamera(name.clone(), names.join(", ")));
+        }
+        (None, None) => return Err(RenderError::NoCameras),
+    };
+    let camera = cam_desc.build(s.width, s.height);
+    let tiles_x = s.width.div_ceil(TILE);
+    let tiles_y = s.height.div_ceil(TILE);
+    let start = Instant::now();
+    let shared = Mutex::new((film, RenderStats::default()));
+    let work = || {
+        (0..tiles_x * tiles_y).into_par_iter().for_each(|t| {
+            let (tx, ty) = (t % tiles_x, t / tiles_x);
+            let (x0, y0) = (tx * TILE, ty * TILE);
+            let (x1, y1) = ((x0 + TILE).min(s.width), (y0 + TILE).min(s.height));
+            let mut sums = Vec::with_capacity((TILE * TILE) as usize);
+            let mut stats = RenderStats::default();
+            for y in y0..y1 {
+                for x in x0..x1 {
+                    let pixel = y as u64 * s.width as u64 + x as u64;
+                    let mut px = PixelSums::default();
+                    for i in first..first + count {
+                        let mut sampler = Sampler::for_sample(s.seed, pixel, i as u64);
+                        let ray = camera.generate_ray(x, y, sampler.next_2d());
+                        let l =
+                            integrator::li(scene, ray, &mut sampler, &s.params, &mut stats.rays);
+                        if l.is_finite() {
+                            px.add(l);
+                        } else {
+                            stats.dropped += 1;
+                            stats.first_dropped.get_or_insert((x, y));
+                        }
+                    }
+                    sums.push(px);
+                }
+            }
+            let n = ((x1 - x0) * (y1 - y0)) as u64 * count as u64;
+            {
+                let mut g = shared.lock().unwrap();
+                let (film, total) = &mut *g;
+                let mut k = 0;
+                for y in y0..y1 {
+                    for x in x0..x1 {
+                        film.add_pixel(x, y, &sums[k]);
+                        k += 1;
+                    }
+                }
+                total.samples += n;
+                total.rays.add(&stats.rays);
+                total.dropped += stats.dropped;
+                // Keep the first dropped pixel in scan order, whatever the thread timing.
+                if let Some(p) = stats.first_dropped {
+                    if total
+                        .first_dropped
+                        .map_or(true, |q| (p.1, p.0) < (q.1, q.0))
+                    {
+                        total.first_dropped = Some(p);
+                    }
+                }
+            }
+            progress(n);
+        });
+    };
+    match s.threads {
+        Some(t) => rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build()
+            .map_err(|e| RenderError::Threads(e.to_string()))?
+            .install(work),
+        None => work(),
+    }
+    let (_, mut stats) = shared.into_inner().unwrap();
+    stats.elapsed = start.elapsed();
+    Ok(stats)
+}
+
+/// Renders the whole image at `s.spp` samples per pixel.
+pub fn render(
+    scene: &Scene,
+    s: &RenderSettings,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<(Film, RenderStats), RenderError> {
+    let mut film = Film::new(s.width, s.height);
+    let stats = render_samples(scene, s, &mut film, 0, s.spp, progress)?;
+    Ok((film, stats))
+}

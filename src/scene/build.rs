@@ -1,0 +1,87 @@
+//! Turning a scene description into the scene the integrators trace: primitives in BVH order,
+//! materials, and one area light per emissive triangle or sphere.
+
+use super::{desc::GeometryDesc, Primitive, Scene, SceneDesc, Shape, NO_LIGHT, NO_NORMALS};
+use crate::accel::Bvh;
+use crate::geometry::{Aabb, Sphere, Triangle};
+use crate::light::{AreaLight, LightShape, Lights};
+use glam::Vec3A;
+
+impl Scene {
+    pub fn build(desc: SceneDesc) -> Scene {
+        let mut prims = Vec::new();
+        let mut bounds = Vec::new();
+        let mut lights = Vec::new();
+        let mut normals = Vec::new();
+        for shape in &desc.shapes {
+            let emission = shape.emission.filter(|e| e.max_element() > 0.0);
+            match &shape.geometry {
+                GeometryDesc::Mesh(mesh) => {
+                    for idx in &mesh.indices {
+                        let [a, b, c] = idx.map(|i| Vec3A::from(mesh.positions[i as usize]));
+                        let tri = Triangle::new(a, b, c);
+                        let area = tri.area();
+                        // Degenerate triangles can never be hit and cannot emit; drop them.
+                        if !(area > 0.0) {
+                            continue;
+                        }
+                        let nidx = match &mesh.normals {
+                            Some(ns) => {
+                                normals.push(idx.map(|i| Vec3A::from(ns[i as usize])));
+                                (normals.len() - 1) as u32
+                            }
+                            None => NO_NORMALS,
+                        };
+                        let light = match emission {
+                            Some(e) => {
+                                lights.push(AreaLight::new(LightShape::Triangle(tri), e));
+                                (lights.len() - 1) as u32
+                            }
+                            None => NO_LIGHT,
+                        };
+                        bounds.push(Aabb::from_points(&[a, b, c]));
+                        prims.push(Primitive {
+                            shape: Shape::Triangle(tri, nidx),
+                            material: shape.material,
+                            light,
+                        });
+                    }
+                }
+                GeometryDesc::Sphere { center, radius } => {
+                    let s = Sphere {
+                        center: (*center).into(),
+                        radius: *radius,
+                    };
+                    let light = match emission {
+                        Some(e) => {
+                            lights.push(AreaLight::new(LightShape::Sphere(s), e));
+                            (lights.len() - 1) as u32
+                        }
+                        None => NO_LIGHT,
+                    };
+                    let r = Vec3A::splat(*radius);
+                    bounds.push(Aabb {
+                        min: s.center - r,
+                        max: s.center + r,
+                    });
+                    prims.push(Primitive {
+                        shape: Shape::Sphere(s),
+                        material: shape.material,
+                        light,
+                    });
+                }
+            }
+        }
+        let bvh = Bvh::build(&bounds);
+        let prims = bvh.order.iter().map(|&i| prims[i as usize]).collect();
+        Scene {
+            prims,
+            bvh,
+            materials: desc.materials,
+            lights: Lights::new(lights),
+            normals,
+            cameras: desc.cameras,
+            desc_settings: desc.settings,
+        }
+    }
+}

@@ -1,0 +1,148 @@
+//! Wavefront OBJ meshes: `v`, `vn` and `f` (with `v`, `v/vt`, `v//vn`, `v/vt/vn` corners,
+//! negative indices counting back from the end, polygons fanned into triangles). Other
+//! statements (`vt`, `o`, `g`, `s`, `usemtl`, `mtllib`, …) are read past. Errors name the
+//! file, line and column.
+
+use super::SceneError;
+use crate::geometry::mesh::TriangleMesh;
+use glam::Vec3;
+use std::collections::HashMap;
+use std::path::Path;
+
+pub fn load_obj(path: &Path) -> Result<TriangleMesh, SceneError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| SceneError::new(path, None, format!("cannot read mesh file: {e}")))?;
+    parse_obj(path, &text)
+}
+
+pub fn parse_obj(path: &Path, text: &str) -> Result<TriangleMesh, SceneError> {
+    let mut pos: Vec<Vec3> = Vec::new();
+    let mut nrm: Vec<Vec3> = Vec::new();
+    // Output vertices are (position, normal) pairs; faces without normals use (p, None).
+    let mut remap: HashMap<(u32, Option<u32>), u32> = HashMap::new();
+    let mut out_pos = Vec::new();
+    let mut out_nrm: Vec<Option<Vec3>> = Vec::new();
+    let mut indices = Vec::new();
+    for (ln, line) in text.lines().enumerate() {
+        let line_no = ln + 1;
+        let content = line.split('#').next().unwrap_or("");
+        let mut fields = Fields::new(content);
+        let Some((_, kw)) = fields.next() else {
+            continue;
+        };
+        let err = |col: usize, msg: String| SceneError::new(path, Some((line_no, col)), msg);
+        match kw {
+            "v" | "vn" => {
+                let mut c = [0.0f32; 3];
+                for (k, slot) in c.iter_mut().enumerate() {
+                    let (col, tok) = fields.next().ok_or_else(|| {
+                        err(line.len() + 1, format!("'{kw}' needs 3 numbers, found {k}"))
+                    })?;
+                    *slot = tok
+                        .parse::<f32>()
+                        .ok()
+                        .filter(|v| v.is_finite())
+                        .ok_or_else(|| {
+                            err(col, format!("expected a finite number, found '{tok}'"))
+                        })?;
+                }
+                if kw == "v" {
+                    pos.push(Vec3::from(c));
+                } else {
+                    nrm.push(Vec3::from(c));
+                }
+            }
+            "f" => {
+                let mut corners = Vec::with_capacity(4);
+                for (col, tok) in fields.by_ref() {
+                    let mut parts = tok.split('/');
+                    let resolve = |s: Option<&str>,
+                                   n: usize,
+                                   what: &str|
+                     -> Result<Option<u32>, SceneError> {
+                        let Some(s) = s.filter(|s| !s.is_empty()) else {
+                            return Ok(None);
+                        };
+                        let i: i64 = s.parse().map_err(|_| {
+                            err(col, format!("expected a {what} index, found '{s}'"))
+                        })?;
+                        let idx = if i > 0 { i - 1 } else { n as i64 + i };
+                        if i == 0 || idx < 0 || idx >= n as i64 {
+                            return Err(err(
+                                col,
+                                format!("{what} index {i} out of range (the file has {n} so far)"),
+                            ));
+                        }
+                        Ok(Some(idx as u32))
+                    };
+                    let vi = resolve(parts.next(), pos.len(), "vertex")?
+                        .ok_or_else(|| err(col, "a face corner needs a vertex index".into()))?;
+                    let _vt = parts.next();
+                    let ni = resolve(parts.next(), nrm.len(), "normal")?;
+                    let key = (vi, ni);
+                    let next = out_pos.len() as u32;
+                    let id = *remap.entry(key).or_insert_with(|| {
+                        out_pos.push(pos[vi as usize]);
+                        out_nrm.push(ni.map(|n| nrm[n as usize]));
+                        next
+                    });
+                    corners.push(id);
+                }
+                if corners.len() < 3 {
+                    return Err(err(
+                        1,
+                        format!("a face needs at least 3 corners, found {}", corners.len()),
+                    ));
+                }
+                for k in 1..corners.len() - 1 {
+                    indices.push([corners[0], corners[k], corners[k + 1]]);
+                }
+            }
+            _ => {}
+        }
+    }
+    let normals = if !out_nrm.is_empty() && out_nrm.iter().all(|n| n.is_some()) {
+        Some(
+            out_nrm
+                .into_iter()
+                .map(|n| n.unwrap().normalize_or_zero())
+                .collect(),
+        )
+    } else {
+        None
+    };
+    Ok(TriangleMesh {
+        positions: out_pos,
+        normals,
+        indices,
+    })
+}
+
+/// Whitespace-separated fields with their 1-based columns.
+struct Fields<'a> {
+    s: &'a str,
+    i: usize,
+}
+
+impl<'a> Fields<'a> {
+    fn new(s: &'a str) -> Self {
+        Fields { s, i: 0 }
+    }
+}
+
+impl<'a> Iterator for Fields<'a> {
+    type Item = (usize, &'a str);
+    fn next(&mut self) -> Option<Self::Item> {
+        let rest = &self.s[self.i..];
+        let start = rest.find(|c: char| !c.is_whitespace())?;
+        let tok_start = self.i + start;
+        let len = self.s[tok_start..]
+            .find(char::is_whitespace)
+            .unwrap_or(self.s.len() - tok_start);
+        self.i = tok_start + len;
+        Some((
+            self.s[..tok_start].chars().count() + 1,
+            &self.s[tok_start..tok_start + len],
+        ))
+    }
+}
