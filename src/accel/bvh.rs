@@ -31,6 +31,10 @@ pub struct Bvh {
 }
 
 const BINS: usize = 16;
+/// Deepest a node may lie. Past `MAX_DEPTH - 32` nodes split at the object median, which
+/// halves the count, so no path can exceed this for fewer than 2³² primitives; traversal
+/// stacks are sized from it.
+pub const MAX_DEPTH: usize = 80;
 const MAX_LEAF: usize = 8;
 /// Cost of visiting a node relative to one primitive test (pbrt-v4 uses 1/2, measured here
 /// for Möller–Trumbore against the slab test).
@@ -69,7 +73,7 @@ impl Bvh {
             // An empty leaf: mark with count 0 but no children; traversal checks `order`.
             return bvh;
         }
-        bvh.build_node(&mut refs, 0);
+        bvh.build_node(&mut refs, 0, 0);
         bvh.order = refs.iter().map(|r| r.index).collect();
         bvh
     }
@@ -92,7 +96,7 @@ impl Bvh {
         });
     }
 
-    fn build_node(&mut self, refs: &mut [BuildRef], first: usize) -> usize {
+    fn build_node(&mut self, refs: &mut [BuildRef], first: usize, depth: usize) -> usize {
         let node_index = self.nodes.len();
         let mut bounds = Aabb::EMPTY;
         let mut cbounds = Aabb::EMPTY;
@@ -106,6 +110,31 @@ impl Bvh {
             return node_index;
         }
         let cext = cbounds.extent();
+        if depth >= MAX_DEPTH - 32 {
+            // Degenerate input (the SAH keeps peeling off few primitives): split at the
+            // object median along the widest centroid axis.
+            let axis = if cext.x >= cext.y && cext.x >= cext.z {
+                0
+            } else if cext.y >= cext.z {
+                1
+            } else {
+                2
+            };
+            let mid = n / 2;
+            refs.select_nth_unstable_by(mid, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
+            self.nodes.push(BvhNode {
+                min: bounds.min.to_array(),
+                offset: 0,
+                max: bounds.max.to_array(),
+                count: 0,
+                axis: axis as u16,
+            });
+            let (left, right) = refs.split_at_mut(mid);
+            self.build_node(left, first, depth + 1);
+            let second = self.build_node(right, first + mid, depth + 1);
+            self.nodes[node_index].offset = second as u32;
+            return node_index;
+        }
         // Find the cheapest binned split over all three axes.
         let mut best: Option<(usize, usize, f32)> = None; // (axis, bin, cost)
         for axis in 0..3 {
@@ -175,8 +204,8 @@ impl Bvh {
             axis: axis as u16,
         });
         let (left, right) = refs.split_at_mut(mid);
-        self.build_node(left, first);
-        let second = self.build_node(right, first + mid);
+        self.build_node(left, first, depth + 1);
+        let second = self.build_node(right, first + mid, depth + 1);
         self.nodes[node_index].offset = second as u32;
         node_index
     }
@@ -195,7 +224,7 @@ impl Bvh {
         }
         let inv_d = ray.d.recip();
         let neg = [ray.d.x < 0.0, ray.d.y < 0.0, ray.d.z < 0.0];
-        let mut stack = [0u32; 64];
+        let mut stack = [0u32; MAX_DEPTH];
         let mut sp = 0usize;
         let mut idx = 0usize;
         let mut found = false;
@@ -245,7 +274,7 @@ impl Bvh {
         }
         let inv_d = ray.d.recip();
         let neg = [ray.d.x < 0.0, ray.d.y < 0.0, ray.d.z < 0.0];
-        let mut stack = [0u32; 64];
+        let mut stack = [0u32; MAX_DEPTH];
         let mut sp = 0usize;
         let mut idx = 0usize;
         loop {

@@ -1,4 +1,6 @@
 //! Acceleration structures: a bounding volume hierarchy over all primitives.
 
 pub mod bvh;
+pub mod wide;
 pub use bvh::Bvh;
+pub use wide::WideBvh;

@@ -2,7 +2,7 @@
 //! materials, and one area light per emissive triangle or sphere.
 
 use super::{desc::GeometryDesc, Primitive, Scene, SceneDesc, Shape, NO_LIGHT, NO_NORMALS};
-use crate::accel::Bvh;
+use crate::accel::{Bvh, WideBvh};
 use crate::geometry::{Aabb, Sphere, Triangle};
 use crate::light::{AreaLight, LightShape, Lights};
 use glam::Vec3A;
@@ -76,7 +76,7 @@ impl Scene {
         let prims = bvh.order.iter().map(|&i| prims[i as usize]).collect();
         Scene {
             prims,
-            bvh,
+            bvh: WideBvh::from_binary(&bvh),
             materials: desc.materials,
             lights: Lights::new(lights),
             normals,

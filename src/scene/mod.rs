@@ -13,7 +13,7 @@ pub mod toml;
 pub use desc::{GeometryDesc, SceneDesc, ShapeDesc};
 pub use error::SceneError;
 
-use crate::accel::Bvh;
+use crate::accel::WideBvh;
 use crate::camera::CameraDesc;
 use crate::geometry::ray::{offset_ray_origin, SHADOW_EPSILON};
 use crate::geometry::{Ray, Sphere, Triangle};
@@ -75,7 +75,7 @@ impl Interaction {
 pub struct Scene {
     /// Primitives in BVH order.
     pub prims: Vec<Primitive>,
-    pub bvh: Bvh,
+    pub bvh: WideBvh,
     pub materials: Vec<Material>,
     pub lights: Lights,
     /// Vertex normals of smooth-shaded triangles, three per entry.
