@@ -48,14 +48,23 @@ impl Film {
         }
     }
 
+    /// The running sums of pixel (x, y).
     #[inline]
-    pub fn add_pixel(&mut self, x: u32, y: u32, p: &PixelSums) {
+    pub fn pixel(&self, x: u32, y: u32) -> PixelSums {
         let i = (y * self.width + x) as usize;
-        for c in 0..3 {
-            self.sum[i][c] += p.sum[c];
-            self.sum_sq[i][c] += p.sum_sq[c];
+        PixelSums {
+            sum: self.sum[i],
+            sum_sq: self.sum_sq[i],
+            count: self.count[i],
         }
-        self.count[i] += p.count;
+    }
+
+    #[inline]
+    pub fn set_pixel(&mut self, x: u32, y: u32, p: &PixelSums) {
+        let i = (y * self.width + x) as usize;
+        self.sum[i] = p.sum;
+        self.sum_sq[i] = p.sum_sq;
+        self.count[i] = p.count;
     }
 
     /// The image: the mean of each pixel's samples.

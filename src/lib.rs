@@ -122,6 +122,7 @@ pub fn resolve_settings(
             shadow_rays,
             rr,
         },
+        sampler: over.sampler.or(file.sampler).unwrap_or_default(),
         threads,
     })
 }

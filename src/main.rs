@@ -5,7 +5,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use mcrt::image::{check_output_path, write_image, ToneMap, WriteOptions};
 use mcrt::integrator::IntegratorKind;
 use mcrt::scene::desc::FileSettings;
-use mcrt::scene::Scene;
+use mcrt::scene::{Scene, SceneError};
 use mcrt::Error;
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -30,6 +30,14 @@ enum IntegratorArg {
     Path,
     /// Emission plus one bounce of direct light, through mirrors and glass.
     Direct,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum SamplerArg {
+    /// Owen-scrambled Sobol points, one sequence per pixel (lower error).
+    Sobol,
+    /// Independent random numbers.
+    Independent,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -75,6 +83,9 @@ struct RenderArgs {
     /// absent: unlimited.
     #[arg(long, allow_negative_numbers = true)]
     max_depth: Option<i64>,
+    /// Sample generator (default: independent).
+    #[arg(long, value_enum)]
+    sampler: Option<SamplerArg>,
     /// Camera to render, by name (default: the scene's, else its first).
     #[arg(long)]
     camera: Option<String>,
@@ -136,6 +147,10 @@ fn render(a: RenderArgs) -> Result<(), Error> {
         shadow_rays: a.shadow_rays,
         rr_survival: a.rr_survival,
         camera: a.camera.clone(),
+        sampler: a.sampler.map(|s| match s {
+            SamplerArg::Sobol => mcrt::sampler::SamplerKind::Sobol,
+            SamplerArg::Independent => mcrt::sampler::SamplerKind::Independent,
+        }),
     };
     // With --max-depth -1 the flag must also override a limit in the file.
     let mut file_settings = desc.settings.clone();
@@ -143,6 +158,26 @@ fn render(a: RenderArgs) -> Result<(), Error> {
         file_settings.max_depth = None;
     }
     let settings = mcrt::resolve_settings(&file_settings, &over, a.threads)?;
+    // The camera must exist before anything is built or rendered.
+    let names: Vec<&str> = desc.cameras.iter().map(|(n, _)| n.as_str()).collect();
+    if names.is_empty() {
+        return Err(SceneError::new(
+            &a.scene,
+            None,
+            "the scene defines no camera (add a [[camera]] table)",
+        )
+        .into());
+    }
+    if let Some(name) = &settings.camera {
+        if !names.contains(&name.as_str()) {
+            return Err(SceneError::new(
+                &a.scene,
+                None,
+                format!("no camera named '{name}' (defined: {})", names.join(", ")),
+            )
+            .into());
+        }
+    }
     let scene = Scene::build(desc);
     let load_time = t_load.elapsed();
 

@@ -3,7 +3,7 @@
 
 use crate::film::{Film, PixelSums};
 use crate::integrator::{self, IntegratorParams, RayStats};
-use crate::sampler::Sampler;
+use crate::sampler::{Sampler, SamplerKind};
 use crate::scene::Scene;
 use rayon::prelude::*;
 use std::sync::Mutex;
@@ -21,6 +21,7 @@ pub struct RenderSettings {
     pub seed: u64,
     pub camera: Option<String>,
     pub params: IntegratorParams,
+    pub sampler: SamplerKind,
     /// Worker threads; None = one per core.
     pub threads: Option<usize>,
 }
@@ -72,14 +73,25 @@ pub fn render_samples(
             let (tx, ty) = (t % tiles_x, t / tiles_x);
             let (x0, y0) = (tx * TILE, ty * TILE);
             let (x1, y1) = ((x0 + TILE).min(s.width), (y0 + TILE).min(s.height));
-            let mut sums = Vec::with_capacity((TILE * TILE) as usize);
+            // Continue each pixel's running sums from the film, so that rendering samples in
+            // several passes adds them in exactly the order one pass would: the result is the
+            // same bits however the samples are split (tiles never share pixels).
+            let mut sums: Vec<PixelSums> = {
+                let g = shared.lock().unwrap();
+                (y0..y1)
+                    .flat_map(|y| (x0..x1).map(move |x| (x, y)))
+                    .map(|(x, y)| g.0.pixel(x, y))
+                    .collect()
+            };
             let mut stats = RenderStats::default();
+            let mut k = 0;
             for y in y0..y1 {
                 for x in x0..x1 {
                     let pixel = y as u64 * s.width as u64 + x as u64;
-                    let mut px = PixelSums::default();
+                    let px = &mut sums[k];
+                    k += 1;
                     for i in first..first + count {
-                        let mut sampler = Sampler::for_sample(s.seed, pixel, i as u64);
+                        let mut sampler = Sampler::for_sample(s.sampler, s.seed, pixel, i as u64);
                         let ray = camera.generate_ray(x, y, sampler.next_2d());
                         let l =
                             integrator::li(scene, ray, &mut sampler, &s.params, &mut stats.rays);
@@ -90,7 +102,6 @@ pub fn render_samples(
                             stats.first_dropped.get_or_insert((x, y));
                         }
                     }
-                    sums.push(px);
                 }
             }
             let n = ((x1 - x0) * (y1 - y0)) as u64 * count as u64;
@@ -100,7 +111,7 @@ pub fn render_samples(
                 let mut k = 0;
                 for y in y0..y1 {
                     for x in x0..x1 {
-                        film.add_pixel(x, y, &sums[k]);
+                        film.set_pixel(x, y, &sums[k]);
                         k += 1;
                     }
                 }

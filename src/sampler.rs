@@ -1,10 +1,11 @@
 //! Random numbers for the estimators.
 //!
-//! Every camera sample owns a stream derived only from (seed, pixel, sample index), so an
-//! image does not depend on how pixels are scheduled over threads or machines: the same seed
-//! and sample count give the same bits on any thread count.
+//! Every camera sample's numbers derive only from (seed, pixel, sample index), so an image
+//! does not depend on how pixels are scheduled over threads or machines: the same seed and
+//! sample count give the same bits on any thread count.
 
 use glam::Vec2;
+use sobol_burley::parts::{hash, owen_scramble_rev};
 
 /// SplitMix64 finaliser (Steele et al., "Fast Splittable Pseudorandom Number Generators",
 /// OOPSLA 2014): a bijective 64-bit mix used to derive independent stream states.
@@ -15,30 +16,149 @@ pub fn mix64(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// Which numbers drive the estimators.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum SamplerKind {
+    /// Owen-scrambled Sobol points (Burley, "Practical Hash-based Owen Scrambling", JCGT 9(4),
+    /// 2020, via the `sobol_burley` crate), one scrambled sequence per pixel: the samples of a
+    /// pixel are stratified in every dimension and in every pair of dimensions at powers of
+    /// two, so error falls faster than with independent numbers.
+    #[default]
+    Sobol,
+    /// Independent uniform numbers (PCG32). Their per-pixel sample variance is an honest
+    /// estimate of the error, which the statistical tests rely on.
+    Independent,
+}
+
+impl SamplerKind {
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "sobol" => Some(SamplerKind::Sobol),
+            "independent" => Some(SamplerKind::Independent),
+            _ => None,
+        }
+    }
+}
+
+/// 1D or 2D requests of a camera sample drawn from Sobol sequences; later ones (deep path
+/// vertices, where stratification no longer pays for its cost) use PCG32. 32 covers the
+/// camera and the first vertices with a few shadow rays each.
+const SOBOL_DIMS: u32 = 32;
+/// Sample indices the Sobol sequence covers; further samples of a pixel are independent.
+const SOBOL_SAMPLES: u64 = 1 << 16;
+
+/// The random numbers of one camera sample.
+#[derive(Clone, Debug)]
+pub struct Sampler {
+    rng: Pcg32,
+    sobol: bool,
+    index: u32,
+    seed: u32,
+    dim: u32,
+}
+
+impl Sampler {
+    /// The numbers for camera sample `index` of pixel `pixel` under `seed`.
+    #[inline]
+    pub fn for_sample(kind: SamplerKind, seed: u64, pixel: u64, index: u64) -> Sampler {
+        let a = mix64(seed ^ 0x9e37_79b9_7f4a_7c15);
+        let b = mix64(a ^ pixel.wrapping_mul(0xd1b5_4a32_d192_ed03));
+        let c = mix64(b ^ index.wrapping_mul(0x8cb9_2ba7_2f3d_8dd7));
+        Sampler {
+            rng: Pcg32::new(c, b),
+            sobol: kind == SamplerKind::Sobol && index < SOBOL_SAMPLES,
+            index: index as u32,
+            seed: (b >> 32) as u32 ^ b as u32,
+            dim: 0,
+        }
+    }
+
+    /// Independent numbers from two words (tests, photon tracing).
+    #[inline]
+    pub fn from_state(state: u64, stream: u64) -> Sampler {
+        Sampler {
+            rng: Pcg32::new(state, stream),
+            sobol: false,
+            index: 0,
+            seed: 0,
+            dim: 0,
+        }
+    }
+
+    #[inline]
+    pub fn next_u32(&mut self) -> u32 {
+        self.rng.next_u32()
+    }
+
+    /// Uniform in [0, 1).
+    #[inline]
+    pub fn next_1d(&mut self) -> f32 {
+        if self.sobol && self.dim < SOBOL_DIMS {
+            let (idx, seed) = self.shuffled_index();
+            let x = owen_scramble_rev(
+                sobol_burley::parts::sobol_rev(idx, 0),
+                hash(seed ^ 0x912f_69ba),
+            );
+            sobol_burley::parts::u32_to_f32_norm(x.reverse_bits())
+        } else {
+            self.rng.next_1d()
+        }
+    }
+
+    /// A uniform point of [0, 1)². With Sobol, every request draws dimensions 0 and 1 of its
+    /// own scrambled sequence (index shuffled and bits scrambled by a per-request seed): the
+    /// pixel's samples of that request form a (0, 2)-sequence, well stratified in 2D, and
+    /// independent of every other request's (pbrt-v4's padded Sobol sampler).
+    #[inline]
+    pub fn next_2d(&mut self) -> Vec2 {
+        if self.sobol && self.dim < SOBOL_DIMS {
+            let (idx, seed) = self.shuffled_index();
+            let x = owen_scramble_rev(
+                sobol_burley::parts::sobol_rev(idx, 0),
+                hash(seed ^ 0x912f_69ba),
+            );
+            let y = owen_scramble_rev(
+                sobol_burley::parts::sobol_rev(idx, 1),
+                hash(seed ^ 0x174f_18ab),
+            );
+            Vec2::new(
+                sobol_burley::parts::u32_to_f32_norm(x.reverse_bits()),
+                sobol_burley::parts::u32_to_f32_norm(y.reverse_bits()),
+            )
+        } else {
+            Vec2::new(self.rng.next_1d(), self.rng.next_1d())
+        }
+    }
+
+    /// The bit-reversed sample index, Owen-scrambled with this request's seed (a random
+    /// permutation of the pixel's samples that keeps power-of-two prefixes stratified), and
+    /// the seed.
+    #[inline]
+    fn shuffled_index(&mut self) -> (u32, u32) {
+        let seed = hash(self.seed ^ hash(self.dim.wrapping_add(0x9e37_79b9)));
+        self.dim += 1;
+        // Only the top 16 reversed bits are used by Sobol (2^16 samples at most).
+        (
+            owen_scramble_rev(self.index.reverse_bits(), hash(seed ^ 0x79c6_8e4a)) & 0xffff_0000,
+            seed,
+        )
+    }
+}
+
 /// PCG32 (O'Neill, "PCG: A Family of Simple Fast Space-Efficient Statistically Good
 /// Algorithms for Random Number Generation", 2014): 64-bit state, 32-bit output.
 #[derive(Clone, Debug)]
-pub struct Sampler {
+pub struct Pcg32 {
     state: u64,
     inc: u64,
 }
 
 const PCG_MULT: u64 = 6_364_136_223_846_793_005;
 
-impl Sampler {
-    /// A stream for camera sample `index` of pixel `pixel` under `seed`.
+impl Pcg32 {
     #[inline]
-    pub fn for_sample(seed: u64, pixel: u64, index: u64) -> Sampler {
-        let a = mix64(seed ^ 0x9e37_79b9_7f4a_7c15);
-        let b = mix64(a ^ pixel.wrapping_mul(0xd1b5_4a32_d192_ed03));
-        let c = mix64(b ^ index.wrapping_mul(0x8cb9_2ba7_2f3d_8dd7));
-        Sampler::from_state(c, b)
-    }
-
-    /// A general stream from two words (used by tests and by photon tracing).
-    #[inline]
-    pub fn from_state(state: u64, stream: u64) -> Sampler {
-        let mut s = Sampler {
+    pub fn new(state: u64, stream: u64) -> Pcg32 {
+        let mut s = Pcg32 {
             state: 0,
             inc: (stream << 1) | 1,
         };
@@ -61,11 +181,5 @@ impl Sampler {
     #[inline]
     pub fn next_1d(&mut self) -> f32 {
         (self.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
-    }
-
-    #[inline]
-    pub fn next_2d(&mut self) -> Vec2 {
-        let x = self.next_1d();
-        Vec2::new(x, self.next_1d())
     }
 }

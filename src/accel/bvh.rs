@@ -223,7 +223,7 @@ impl Bvh {
             return false;
         }
         let inv_d = ray.d.recip();
-        let neg = [ray.d.x < 0.0, ray.d.y < 0.0, ray.d.z < 0.0];
+        let neg = [inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0];
         let mut stack = [0u32; MAX_DEPTH];
         let mut sp = 0usize;
         let mut idx = 0usize;
@@ -273,7 +273,7 @@ impl Bvh {
             return false;
         }
         let inv_d = ray.d.recip();
-        let neg = [ray.d.x < 0.0, ray.d.y < 0.0, ray.d.z < 0.0];
+        let neg = [inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0];
         let mut stack = [0u32; MAX_DEPTH];
         let mut sp = 0usize;
         let mut idx = 0usize;

@@ -237,7 +237,9 @@ impl RayBoxes {
                 Vec4::splat(ray.o.z),
             ],
             inv: [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)],
-            neg: [ray.d.x < 0.0, ray.d.y < 0.0, ray.d.z < 0.0],
+            // The sign of the reciprocal, not of the direction: −0.0 < 0.0 is false, yet its
+            // reciprocal is −∞, so the far bound is the minimum.
+            neg: [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0],
         }
     }
 

@@ -23,6 +23,9 @@ pub fn li(
     let mut l = Color::ZERO;
     let mut beta = Color::ONE;
     let max_depth = p.max_depth.unwrap_or(u32::MAX);
+    if max_depth == 0 {
+        return Color::ZERO; // no segment at all: not even emitters are seen
+    }
     let mut depth = 0u32;
     loop {
         stats.rays += 1;

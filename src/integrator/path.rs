@@ -22,6 +22,9 @@ pub fn li(
     // Previous vertex and BSDF pdf for MIS on emitter hits; None after a specular bounce.
     let mut prev: Option<(glam::Vec3A, f32)> = None;
     let max_depth = p.max_depth.unwrap_or(u32::MAX);
+    if max_depth == 0 {
+        return Color::ZERO; // no segment at all: not even emitters are seen
+    }
     let mut depth = 0u32; // segments traced so far, minus one
     loop {
         stats.rays += 1;

@@ -34,6 +34,7 @@ pub struct FileSettings {
     pub shadow_rays: Option<u32>,
     pub rr_survival: Option<f32>,
     pub camera: Option<String>,
+    pub sampler: Option<crate::sampler::SamplerKind>,
 }
 
 #[derive(Clone, Debug, Default)]

@@ -22,7 +22,7 @@ type V3 = [f32; 3];
 #[derive(Deserialize, Clone, Copy)]
 #[serde(
     untagged,
-    expecting = "a colour: a number or an array of three numbers [r, g, b]"
+    expecting = "expected a colour: a number or an array of three numbers [r, g, b]"
 )]
 enum ColorT {
     Grey(f32),
@@ -62,6 +62,7 @@ struct RenderT {
     shadow_rays: Option<Spanned<u32>>,
     rr_survival: Option<Spanned<f32>>,
     camera: Option<Spanned<String>>,
+    sampler: Option<Spanned<String>>,
 }
 
 #[derive(Deserialize)]
@@ -151,7 +152,7 @@ impl Ctx<'_> {
                         span.clone(),
                         format!(
                             "'{key}' does not apply to {what} (its keys: {})",
-                            allowed.join(", ")
+                            list_or_none(allowed)
                         ),
                     );
                 }
@@ -177,6 +178,15 @@ impl Ctx<'_> {
             }
         }
         Ok(c)
+    }
+}
+
+/// "a, b, c", or "none" for an empty list.
+fn list_or_none(items: &[&str]) -> String {
+    if items.is_empty() {
+        "none".to_string()
+    } else {
+        items.join(", ")
     }
 }
 
@@ -330,11 +340,7 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                         format!(
                             "unknown material '{}' (defined: {})",
                             m.get_ref(),
-                            if known.is_empty() {
-                                "none".into()
-                            } else {
-                                known.join(", ")
-                            }
+                            list_or_none(&known)
                         ),
                     );
                 }
@@ -459,6 +465,9 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                                     ),
                                 );
                             }
+                            Some(ns) if !ns.get_ref().iter().flatten().all(|c| c.is_finite()) => {
+                                return cx.err(ns.span(), "normals must be finite numbers");
+                            }
                             Some(ns) => Some(
                                 ns.get_ref()
                                     .iter()
@@ -521,7 +530,10 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
             let names: Vec<&str> = desc.cameras.iter().map(|(n, _)| n.as_str()).collect();
             return cx.err(
                 span,
-                format!("no camera named '{name}' (defined: {})", names.join(", ")),
+                format!(
+                    "no camera named '{name}' (defined: {})",
+                    list_or_none(&names)
+                ),
             );
         }
     }
@@ -573,7 +585,23 @@ fn settings(cx: &Ctx, r: &RenderT) -> Result<FileSettings, SceneError> {
         }
         p => p.as_ref().map(|p| *p.get_ref()),
     };
+    let sampler = match &r.sampler {
+        None => None,
+        Some(v) => Some(crate::sampler::SamplerKind::parse(v.get_ref()).map_or_else(
+            || {
+                cx.err(
+                    v.span(),
+                    format!(
+                        "unknown sampler '{}' (expected 'sobol' or 'independent')",
+                        v.get_ref()
+                    ),
+                )
+            },
+            Ok,
+        )?),
+    };
     Ok(FileSettings {
+        sampler,
         width: positive(&r.width, "width")?,
         height: positive(&r.height, "height")?,
         spp: positive(&r.spp, "spp")?,
