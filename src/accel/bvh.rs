@@ -1,14 +1,13 @@
 //! A bounding volume hierarchy built with the binned surface area heuristic and stored as a
 //! flat array of 32-byte nodes in depth-first order.
 //!
-//! The BVH knows nothing about primitives beyond their bounds: traversal calls a closure with
-//! the index of each candidate primitive (in the BVH's own order), so the caller's enum of
-//! primitive kinds is matched inline, with no dynamic dispatch per ray.
+//! The BVH knows nothing about primitives beyond their bounds. It is the build stage: for
+//! traversal it is collapsed into the 4-wide tree of [`super::wide`].
 //!
 //! Build: Wald, "On fast Construction of SAH-based Bounding Volume Hierarchies", RT 2007
 //! (binning centroids into 16 buckets per axis and sweeping for the cheapest split).
 
-use crate::geometry::{Aabb, Ray};
+use crate::geometry::Aabb;
 use glam::Vec3A;
 
 /// One node. Interior nodes have `count == 0`; their first child follows them in the array
@@ -210,103 +209,6 @@ impl Bvh {
         node_index
     }
 
-    /// Closest hit. `hit(prim, t_max)` tests the BVH's primitive `prim` and returns its
-    /// distance if it is nearer than `t_max`; the caller keeps whatever else it needs.
-    #[inline]
-    pub fn intersect<F: FnMut(usize, f32) -> Option<f32>>(
-        &self,
-        ray: &Ray,
-        mut t_max: f32,
-        mut hit: F,
-    ) -> bool {
-        if self.order.is_empty() {
-            return false;
-        }
-        let inv_d = ray.d.recip();
-        let neg = [inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0];
-        let mut stack = [0u32; MAX_DEPTH];
-        let mut sp = 0usize;
-        let mut idx = 0usize;
-        let mut found = false;
-        loop {
-            let node = &self.nodes[idx];
-            if slab(node, ray.o, inv_d, t_max) {
-                if node.count > 0 {
-                    let first = node.offset as usize;
-                    for p in first..first + node.count as usize {
-                        if let Some(t) = hit(p, t_max) {
-                            t_max = t;
-                            found = true;
-                        }
-                    }
-                } else {
-                    // Visit the child nearer along the split axis first.
-                    let (near, far) = if neg[node.axis as usize] {
-                        (node.offset as usize, idx + 1)
-                    } else {
-                        (idx + 1, node.offset as usize)
-                    };
-                    stack[sp] = far as u32;
-                    sp += 1;
-                    idx = near;
-                    continue;
-                }
-            }
-            if sp == 0 {
-                break;
-            }
-            sp -= 1;
-            idx = stack[sp] as usize;
-        }
-        found
-    }
-
-    /// Any hit before `t_max`, for shadow rays.
-    #[inline]
-    pub fn occluded<F: FnMut(usize, f32) -> bool>(
-        &self,
-        ray: &Ray,
-        t_max: f32,
-        mut hit: F,
-    ) -> bool {
-        if self.order.is_empty() {
-            return false;
-        }
-        let inv_d = ray.d.recip();
-        let neg = [inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0];
-        let mut stack = [0u32; MAX_DEPTH];
-        let mut sp = 0usize;
-        let mut idx = 0usize;
-        loop {
-            let node = &self.nodes[idx];
-            if slab(node, ray.o, inv_d, t_max) {
-                if node.count > 0 {
-                    let first = node.offset as usize;
-                    for p in first..first + node.count as usize {
-                        if hit(p, t_max) {
-                            return true;
-                        }
-                    }
-                } else {
-                    let (near, far) = if neg[node.axis as usize] {
-                        (node.offset as usize, idx + 1)
-                    } else {
-                        (idx + 1, node.offset as usize)
-                    };
-                    stack[sp] = far as u32;
-                    sp += 1;
-                    idx = near;
-                    continue;
-                }
-            }
-            if sp == 0 {
-                return false;
-            }
-            sp -= 1;
-            idx = stack[sp] as usize;
-        }
-    }
-
     pub fn depth(&self) -> usize {
         fn rec(b: &Bvh, i: usize) -> usize {
             let n = &b.nodes[i];
@@ -318,18 +220,6 @@ impl Bvh {
         }
         rec(self, 0)
     }
-}
-
-/// Slab test (Kay and Kajiya 1986) against the interval (0, t_max).
-#[inline(always)]
-fn slab(node: &BvhNode, o: Vec3A, inv_d: Vec3A, t_max: f32) -> bool {
-    let t0 = (Vec3A::from_array(node.min) - o) * inv_d;
-    let t1 = (Vec3A::from_array(node.max) - o) * inv_d;
-    let tn = t0.min(t1).max_element().max(0.0);
-    // The far distance is rounded up by 2γ(3) so boxes are never missed through rounding
-    // (Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013).
-    let tf = t0.max(t1).min_element() * (1.0 + 2.0 * crate::geometry::ray::gamma(3));
-    tn <= tf && tn < t_max
 }
 
 /// Stable-enough in-place partition; returns the number of elements satisfying `pred`,

@@ -126,7 +126,10 @@ impl WideBvh {
         self.bounds
     }
 
-    /// Closest hit; `hit(prim, t_max)` as in [`Bvh::intersect`].
+    /// Closest hit. `hit(prim, t_max)` tests the primitive `prim` (in the BVH's order) and
+    /// returns its distance if nearer than `t_max`; the caller keeps whatever else it needs.
+    /// The closure is monomorphised, so the caller's primitive enum is matched inline, with
+    /// no dynamic dispatch per ray.
     #[inline]
     pub fn intersect<F: FnMut(usize, f32) -> Option<f32>>(
         &self,
