@@ -120,10 +120,7 @@ pub fn render_samples(
                 total.dropped += stats.dropped;
                 // Keep the first dropped pixel in scan order, whatever the thread timing.
                 if let Some(p) = stats.first_dropped {
-                    if total
-                        .first_dropped
-                        .map_or(true, |q| (p.1, p.0) < (q.1, q.0))
-                    {
+                    if total.first_dropped.is_none_or(|q| (p.1, p.0) < (q.1, q.0)) {
                         total.first_dropped = Some(p);
                     }
                 }

@@ -124,12 +124,12 @@ fn two_passes_equal_one() {
         );
         // Each pass continues the pixels' running sums, so the sums are the same bits too.
         let bits = |f: &Film| {
-            (f.sum
+            f.sum
                 .iter()
                 .chain(&f.sum_sq)
                 .flatten()
                 .map(|v| v.to_bits())
-                .collect::<Vec<u64>>())
+                .collect::<Vec<u64>>()
         };
         assert!(
             bits(&once) == bits(&twice),

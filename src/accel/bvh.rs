@@ -169,7 +169,7 @@ impl Bvh {
                 }
                 let cost =
                     cnt as f32 * acc.surface_area() + right_count[i + 1] as f32 * right_area[i + 1];
-                if best.map_or(true, |(_, _, c)| cost < c) {
+                if best.is_none_or(|(_, _, c)| cost < c) {
                     best = Some((axis, i, cost));
                 }
             }

@@ -625,7 +625,7 @@ fn material(cx: &Ctx, m: &Spanned<MaterialT>) -> Result<Material, SceneError> {
         ("ext_ior", span_of(&t.ext_ior)),
         ("two_sided", span_of(&t.two_sided)),
     ];
-    let two_sided = t.two_sided.as_ref().map_or(true, |v| *v.get_ref());
+    let two_sided = t.two_sided.as_ref().is_none_or(|v| *v.get_ref());
     let bsdf = match t.kind.get_ref().as_str() {
         "lambert" => {
             cx.only(&present, &["albedo", "two_sided"], "a lambert material")?;
