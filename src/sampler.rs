@@ -20,13 +20,14 @@ pub fn mix64(mut z: u64) -> u64 {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum SamplerKind {
     /// Owen-scrambled Sobol points (Burley, "Practical Hash-based Owen Scrambling", JCGT 9(4),
-    /// 2020, via the `sobol_burley` crate), one scrambled sequence per pixel: the samples of a
-    /// pixel are stratified in every dimension and in every pair of dimensions at powers of
-    /// two, so error falls faster than with independent numbers.
-    #[default]
+    /// 2020, via the `sobol_burley` crate), padded: each 1D or 2D request of a camera sample
+    /// draws from its own scrambled sequence, so a pixel's samples are stratified in each.
+    /// On the TNCG15 room it lowers the 16×16 block error by about 10 % at equal spp but costs
+    /// 41 % more instructions (callgrind), so it is not the default.
     Sobol,
-    /// Independent uniform numbers (PCG32). Their per-pixel sample variance is an honest
-    /// estimate of the error, which the statistical tests rely on.
+    /// Independent uniform numbers (PCG32), the default. Their per-pixel sample variance is an
+    /// honest estimate of the error, which the statistical tests rely on.
+    #[default]
     Independent,
 }
 
