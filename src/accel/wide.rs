@@ -169,7 +169,14 @@ impl WideBvh {
                         cur = order[0].1;
                         continue;
                     }
-                    order[..n].sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+                    // Insertion sort of at most four entries, farthest first.
+                    for i in 1..n {
+                        let mut j = i;
+                        while j > 0 && order[j - 1].0 < order[j].0 {
+                            order.swap(j - 1, j);
+                            j -= 1;
+                        }
+                    }
                     for &(_, c) in &order[..n - 1] {
                         stack.push(c);
                     }
