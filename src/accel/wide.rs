@@ -159,11 +159,12 @@ impl WideBvh {
                     let mut order = [(0f32, 0u32); 4];
                     let mut n = 0;
                     let t = tnear.to_array();
-                    for s in 0..4 {
-                        if mask & (1 << s) != 0 {
-                            order[n] = (t[s], node.child[s]);
-                            n += 1;
-                        }
+                    let mut m = mask;
+                    while m != 0 {
+                        let s = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        order[n] = (t[s], node.child[s]);
+                        n += 1;
                     }
                     if n == 1 {
                         cur = order[0].1;
