@@ -122,18 +122,7 @@ impl Bvh {
             };
             let mid = n / 2;
             refs.select_nth_unstable_by(mid, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
-            self.nodes.push(BvhNode {
-                min: bounds.min.to_array(),
-                offset: 0,
-                max: bounds.max.to_array(),
-                count: 0,
-                axis: axis as u16,
-            });
-            let (left, right) = refs.split_at_mut(mid);
-            self.build_node(left, first, depth + 1);
-            let second = self.build_node(right, first + mid, depth + 1);
-            self.nodes[node_index].offset = second as u32;
-            return node_index;
+            return self.push_interior(refs, first, depth, &bounds, axis, mid);
         }
         // Find the cheapest binned split over all three axes.
         let mut best: Option<(usize, usize, f32)> = None; // (axis, bin, cost)
@@ -196,6 +185,20 @@ impl Bvh {
                 return node_index;
             }
         };
+        self.push_interior(refs, first, depth, &bounds, axis, mid)
+    }
+
+    /// Emits an inner node over `refs`, split at `mid` along `axis`, and builds its children.
+    fn push_interior(
+        &mut self,
+        refs: &mut [BuildRef],
+        first: usize,
+        depth: usize,
+        bounds: &Aabb,
+        axis: usize,
+        mid: usize,
+    ) -> usize {
+        let node_index = self.nodes.len();
         self.nodes.push(BvhNode {
             min: bounds.min.to_array(),
             offset: 0,
