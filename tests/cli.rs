@@ -352,28 +352,9 @@ fn obj_face_index_out_of_range() {
     );
 }
 
+/// An unknown `--camera NAME` is reported against the scene file, with the names it defines.
 #[test]
-fn unknown_camera_flag() {
-    let dir = TempDir::new("camera-flag");
-    let scene = scene_path("tncg15.toml");
-    let out = dir.path().join("out.png");
-    check_failure(
-        &dir,
-        &scene,
-        &out,
-        &["--camera", "eye3"],
-        // Which file: see bug_unknown_camera_flag_names_scene_file.
-        Path::new("eye3"),
-        None,
-        None,
-        &["'eye3'", "eye1", "eye2"],
-    );
-}
-
-/// BUG: the error for `--camera NAME` does not name the scene file (src/render.rs,
-/// RenderError::NoCamera is raised by render_samples, which knows no path).
-#[test]
-fn bug_unknown_camera_flag_names_scene_file() {
+fn unknown_camera_flag_names_scene_file() {
     let dir = TempDir::new("camera-flag-file");
     let scene = scene_path("tncg15.toml");
     let out = dir.path().join("out.png");
@@ -389,9 +370,9 @@ fn bug_unknown_camera_flag_names_scene_file() {
     );
 }
 
-/// BUG: a scene without a camera fails with "the scene has no camera", naming no file.
+/// A scene without a camera is reported against its file.
 #[test]
-fn bug_scene_without_camera_names_file() {
+fn scene_without_camera_names_file() {
     let dir = TempDir::new("no-camera");
     let scene = dir.write(
         "scene.toml",
@@ -616,10 +597,10 @@ fn tiny_render_png_and_exr() {
     assert_eq!(dir.listing(), vec!["room-half.exr", "room.exr", "room.png"]);
 }
 
-/// BUG: with Mitsuba's meaning of max_depth, a path of 0 segments carries no light and the
-/// image is black; mcrt renders max_depth 0 like max_depth 1 (emitters seen directly).
+/// With Mitsuba's meaning of max_depth, a path of 0 segments carries no light: the image is
+/// black, even where the light is seen directly.
 #[test]
-fn bug_max_depth_zero_is_black() {
+fn max_depth_zero_is_black() {
     let dir = TempDir::new("depth0");
     let exr = dir.path().join("d0.exr");
     tiny_render(&exr, &["-q", "--max-depth", "0"]);
