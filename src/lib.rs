@@ -58,19 +58,47 @@ impl Error {
     }
 }
 
-/// Reads a scene file; the format follows the extension (`.toml`: mcrt's own format).
+/// Options for reading a scene file.
+#[derive(Clone, Debug, Default)]
+pub struct LoadOptions {
+    /// `-D name=value`: parameters of a Mitsuba XML scene.
+    pub defines: Vec<(String, String)>,
+    /// Render unsupported parts of an XML scene approximately instead of refusing them.
+    pub lenient: bool,
+}
+
+/// Reads a scene file; the format follows the extension (`.toml`: mcrt's own format; `.xml`:
+/// Mitsuba 3).
 pub fn load_scene(path: &Path) -> Result<SceneDesc, Error> {
+    load_scene_with(path, &LoadOptions::default())
+}
+
+pub fn load_scene_with(path: &Path, opts: &LoadOptions) -> Result<SceneDesc, Error> {
     match path
         .extension()
         .and_then(|e| e.to_str())
         .map(|e| e.to_ascii_lowercase())
         .as_deref()
     {
-        Some("toml") => Ok(scene::toml::load_toml(path)?),
+        Some("toml") => {
+            if !opts.defines.is_empty() {
+                return Err(Error::Usage(
+                    "-D parameters apply to Mitsuba XML scenes, not to .toml ones".into(),
+                ));
+            }
+            Ok(scene::toml::load_toml(path)?)
+        }
+        Some("xml") => Ok(scene::xml::load_xml(
+            path,
+            &scene::xml::XmlOptions {
+                defines: opts.defines.clone(),
+                lenient: opts.lenient,
+            },
+        )?),
         _ => Err(Error::Scene(SceneError::new(
             path,
             None,
-            "unsupported scene format (expected a .toml file)",
+            "unsupported scene format (expected a .toml file or a Mitsuba 3 .xml file)",
         ))),
     }
 }
@@ -105,8 +133,22 @@ pub fn resolve_settings(
             )))
         }
         Some(p) => RussianRoulette::Fixed(p),
-        None => RussianRoulette::Throughput { start: 5 },
+        None => RussianRoulette::Throughput {
+            start: over.rr_depth.or(file.rr_depth).unwrap_or(5),
+        },
     };
+    let crop = match over.crop {
+        Some(c) => Some(c),
+        None if over.width.is_some() || over.height.is_some() => None,
+        None => file.crop,
+    };
+    if let Some([x, y, w, h]) = crop {
+        if w == 0 || h == 0 || x + w > width || y + h > height {
+            return Err(Error::Usage(format!(
+                "the crop window ({x}, {y}) + ({w} × {h}) does not fit in the {width} × {height} image"
+            )));
+        }
+    }
     Ok(RenderSettings {
         width,
         height,
@@ -121,7 +163,11 @@ pub fn resolve_settings(
             max_depth: over.max_depth.or(file.max_depth),
             shadow_rays,
             rr,
+            hide_emitters: over.hide_emitters.or(file.hide_emitters).unwrap_or(false),
+            specular_chain: over.specular_chain.or(file.specular_chain).unwrap_or(true),
         },
+        // A crop window from the file belongs to the file's image size.
+        crop,
         sampler: over.sampler.or(file.sampler).unwrap_or_default(),
         threads,
     })

@@ -49,8 +49,14 @@ enum ToneMapArg {
 
 #[derive(clap::Args)]
 struct RenderArgs {
-    /// Scene file (.toml, mcrt's format: see docs/scene-format.md).
+    /// Scene file: .toml (mcrt's format, see docs/scene-format.md) or .xml (Mitsuba 3).
     scene: PathBuf,
+    /// Set a parameter of a Mitsuba XML scene (its <default> or $name), as Mitsuba's -D.
+    #[arg(short = 'D', value_name = "NAME=VALUE")]
+    define: Vec<String>,
+    /// Render unsupported BSDFs of an XML scene as grey diffuse (listed) instead of failing.
+    #[arg(long)]
+    lenient: bool,
     /// Output image; the extension picks the format (.png or .exr). Default: SCENE's name with .png.
     #[arg(short, long)]
     output: Option<PathBuf>,
@@ -133,7 +139,21 @@ fn render(a: RenderArgs) -> Result<(), Error> {
         return Err(Error::Usage("--threads must be at least 1".into()));
     }
     let t_load = Instant::now();
-    let desc = mcrt::load_scene(&a.scene)?;
+    let mut defines = Vec::new();
+    for d in &a.define {
+        let Some((k, v)) = d.split_once('=') else {
+            return Err(Error::Usage(format!("-D expects NAME=VALUE, got '{d}'")));
+        };
+        defines.push((k.to_string(), v.to_string()));
+    }
+    let load = mcrt::LoadOptions {
+        defines,
+        lenient: a.lenient,
+    };
+    let desc = mcrt::load_scene_with(&a.scene, &load)?;
+    for w in &desc.warnings {
+        eprintln!("warning: {w}");
+    }
     let over = FileSettings {
         width: a.width,
         height: a.height,
@@ -151,6 +171,7 @@ fn render(a: RenderArgs) -> Result<(), Error> {
             SamplerArg::Sobol => mcrt::sampler::SamplerKind::Sobol,
             SamplerArg::Independent => mcrt::sampler::SamplerKind::Independent,
         }),
+        ..Default::default()
     };
     // With --max-depth -1 the flag must also override a limit in the file.
     let mut file_settings = desc.settings.clone();
@@ -181,7 +202,8 @@ fn render(a: RenderArgs) -> Result<(), Error> {
     let scene = Scene::build(desc);
     let load_time = t_load.elapsed();
 
-    let total = settings.width as u64 * settings.height as u64 * settings.spp as u64;
+    let (_, _, fw, fh) = settings.window();
+    let total = fw as u64 * fh as u64 * settings.spp as u64;
     let show = !a.quiet && std::io::stderr().is_terminal();
     let bar = if show {
         let b = ProgressBar::new(total);
@@ -212,8 +234,8 @@ fn render(a: RenderArgs) -> Result<(), Error> {
         eprintln!(
             "{}: {}x{} at {} spp ({}, {} primitives, {} lights, loaded in {:.2} s) in {:.2} s: {:.2} M samples/s, {:.2} M rays/s ({:.2} M shadow rays/s)",
             output.display(),
-            settings.width,
-            settings.height,
+            fw,
+            fh,
             settings.spp,
             settings.params.kind.name(),
             scene.prims.len(),

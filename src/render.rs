@@ -24,6 +24,18 @@ pub struct RenderSettings {
     pub sampler: SamplerKind,
     /// Worker threads; None = one per core.
     pub threads: Option<usize>,
+    /// Render only this window (x, y, width, height) of the width × height image.
+    pub crop: Option<[u32; 4]>,
+}
+
+impl RenderSettings {
+    /// The film's size and its offset in the full image.
+    pub fn window(&self) -> (u32, u32, u32, u32) {
+        match self.crop {
+            Some([x, y, w, h]) => (x, y, w, h),
+            None => (0, 0, self.width, self.height),
+        }
+    }
 }
 
 #[derive(Clone, Debug, Default)]
@@ -64,15 +76,16 @@ pub fn render_samples(
         (None, None) => return Err(RenderError::NoCameras),
     };
     let camera = cam_desc.build(s.width, s.height);
-    let tiles_x = s.width.div_ceil(TILE);
-    let tiles_y = s.height.div_ceil(TILE);
+    let (ox, oy, fw, fh) = s.window();
+    let tiles_x = fw.div_ceil(TILE);
+    let tiles_y = fh.div_ceil(TILE);
     let start = Instant::now();
     let shared = Mutex::new((film, RenderStats::default()));
     let work = || {
         (0..tiles_x * tiles_y).into_par_iter().for_each(|t| {
             let (tx, ty) = (t % tiles_x, t / tiles_x);
             let (x0, y0) = (tx * TILE, ty * TILE);
-            let (x1, y1) = ((x0 + TILE).min(s.width), (y0 + TILE).min(s.height));
+            let (x1, y1) = ((x0 + TILE).min(fw), (y0 + TILE).min(fh));
             // Continue each pixel's running sums from the film, so that rendering samples in
             // several passes adds them in exactly the order one pass would: the result is the
             // same bits however the samples are split (tiles never share pixels).
@@ -87,12 +100,15 @@ pub fn render_samples(
             let mut k = 0;
             for y in y0..y1 {
                 for x in x0..x1 {
-                    let pixel = y as u64 * s.width as u64 + x as u64;
+                    // Random numbers follow the pixel of the full image, so a crop renders
+                    // the same values as the whole image does there.
+                    let (gx, gy) = (x + ox, y + oy);
+                    let pixel = gy as u64 * s.width as u64 + gx as u64;
                     let px = &mut sums[k];
                     k += 1;
                     for i in first..first + count {
                         let mut sampler = Sampler::for_sample(s.sampler, s.seed, pixel, i as u64);
-                        let ray = camera.generate_ray(x, y, sampler.next_2d());
+                        let ray = camera.generate_ray(gx, gy, sampler.next_2d());
                         let l =
                             integrator::li(scene, ray, &mut sampler, &s.params, &mut stats.rays);
                         if l.is_finite() {
@@ -147,7 +163,8 @@ pub fn render(
     s: &RenderSettings,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<(Film, RenderStats), RenderError> {
-    let mut film = Film::new(s.width, s.height);
+    let (_, _, w, h) = s.window();
+    let mut film = Film::new(w, h);
     let stats = render_samples(scene, s, &mut film, 0, s.spp, progress)?;
     Ok((film, stats))
 }

@@ -62,6 +62,28 @@ fn matches_mitsuba(
 }
 
 #[test]
+fn mitsuba_xml_cornell_box_matches_mitsuba() {
+    let s = matches_mitsuba(
+        "tests/data/mitsuba/cornell-box.xml",
+        None,
+        "cornell-box.exr",
+        8192,
+    );
+    assert_eq!(s.params.max_depth, Some(8), "max_depth read from the XML");
+}
+
+#[test]
+fn mitsuba_xml_hexroom_matches_mitsuba() {
+    let s = matches_mitsuba(
+        "tests/data/mitsuba/hexroom/hexroom.xml",
+        None,
+        "hexroom-eye1.exr",
+        16384,
+    );
+    assert_eq!(s.params.max_depth, None, "max_depth -1 is unlimited");
+}
+
+#[test]
 fn tncg15_eye1_matches_mitsuba() {
     matches_mitsuba(
         "scenes/tncg15.toml",

@@ -56,6 +56,10 @@ pub struct IntegratorParams {
     /// Shadow rays per non-specular vertex.
     pub shadow_rays: u32,
     pub rr: RussianRoulette,
+    /// Emitters seen directly from the camera are black.
+    pub hide_emitters: bool,
+    /// `direct` follows mirrors and glass to the first non-specular surface.
+    pub specular_chain: bool,
 }
 
 impl Default for IntegratorParams {
@@ -65,6 +69,8 @@ impl Default for IntegratorParams {
             max_depth: None,
             shadow_rays: 1,
             rr: RussianRoulette::Throughput { start: 5 },
+            hide_emitters: false,
+            specular_chain: true,
         }
     }
 }

@@ -35,6 +35,27 @@ pub struct FileSettings {
     pub rr_survival: Option<f32>,
     pub camera: Option<String>,
     pub sampler: Option<crate::sampler::SamplerKind>,
+    /// Russian roulette from this path depth on (Mitsuba's `rr_depth`).
+    pub rr_depth: Option<u32>,
+    /// Emitters seen directly by the camera render black (Mitsuba's `hide_emitters`).
+    pub hide_emitters: Option<bool>,
+    /// Whether `direct` follows mirrors and glass to the first diffuse surface (mcrt's
+    /// default) or stops at the first surface (Mitsuba's `direct`).
+    pub specular_chain: Option<bool>,
+    /// Render only this window of the image: x, y, width, height (Mitsuba's crop).
+    pub crop: Option<[u32; 4]>,
+}
+
+/// Lights that are not shapes.
+#[derive(Clone, Debug)]
+pub enum LightDesc {
+    /// Radiant intensity I (W/sr) in every direction from a point.
+    Point { position: Vec3, intensity: Color },
+    /// Irradiance E arriving along `direction` (the way the light travels) from infinitely
+    /// far away.
+    Directional { direction: Vec3, irradiance: Color },
+    /// Constant radiance arriving from every direction (a uniform environment).
+    Constant { radiance: Color },
 }
 
 #[derive(Clone, Debug, Default)]
@@ -43,4 +64,7 @@ pub struct SceneDesc {
     pub cameras: Vec<(String, CameraDesc)>,
     pub materials: Vec<Material>,
     pub shapes: Vec<ShapeDesc>,
+    pub lights: Vec<LightDesc>,
+    /// Things the loader accepted but rendered differently, one line each with file:line:col.
+    pub warnings: Vec<String>,
 }

@@ -9,6 +9,7 @@ pub mod desc;
 pub mod error;
 pub mod obj;
 pub mod toml;
+pub mod xml;
 
 pub use desc::{GeometryDesc, SceneDesc, ShapeDesc};
 pub use error::SceneError;

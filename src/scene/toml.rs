@@ -611,6 +611,7 @@ fn settings(cx: &Ctx, r: &RenderT) -> Result<FileSettings, SceneError> {
         shadow_rays: positive(&r.shadow_rays, "shadow_rays")?,
         rr_survival,
         camera: r.camera.as_ref().map(|c| c.get_ref().clone()),
+        ..Default::default()
     })
 }
 

@@ -1,0 +1,695 @@
+//! Turning Mitsuba objects (sensor, integrator, BSDFs, shapes, emitters) into a scene
+//! description.
+
+use super::document::{Document, Elem};
+use super::props::{ColorSrc, Ids, Props, Result};
+use crate::camera::{CameraDesc, FovAxis};
+use crate::geometry::mesh::TriangleMesh;
+use crate::integrator::IntegratorKind;
+use crate::material::{Bsdf, Dielectric, Lambert, Material, Mirror};
+use crate::scene::desc::{GeometryDesc, LightDesc, SceneDesc, ShapeDesc};
+use crate::scene::obj::load_obj;
+use crate::Color;
+use glam::{Mat4, Vec3};
+use std::collections::HashMap;
+use std::path::PathBuf;
+
+/// Segments of the polygon that stands for a `disk` (its radius is enlarged so that the area,
+/// and so an emitter's power, is exact).
+const DISK_SEGMENTS: u32 = 256;
+
+struct Builder<'a> {
+    doc: &'a Document,
+    ids: Ids<'a>,
+    lenient: bool,
+    desc: SceneDesc,
+    /// Material index of each BSDF element already converted (shared through `<ref>`).
+    materials: HashMap<*const Elem, u32>,
+    default_material: Option<u32>,
+}
+
+pub fn build(doc: &Document, lenient: bool) -> Result<SceneDesc> {
+    let mut b = Builder {
+        doc,
+        ids: Ids::collect(doc)?,
+        lenient,
+        desc: SceneDesc::default(),
+        materials: HashMap::new(),
+        default_material: None,
+    };
+    let scene = Props::new(doc, &b.ids, &doc.root)?;
+    let mut sensors = 0;
+    for &obj in &scene.objects {
+        match obj.tag.as_str() {
+            "sensor" => {
+                b.sensor(obj, sensors)?;
+                sensors += 1;
+            }
+            "integrator" => b.integrator(obj)?,
+            "shape" => b.shape(obj)?,
+            "emitter" => b.emitter(obj)?,
+            // Declared for later reference by id.
+            "bsdf" | "texture" => {
+                if obj.attr("id").is_none() {
+                    return Err(doc.err(obj, format!("a top-level <{}> needs an id", obj.tag)));
+                }
+            }
+            tag => {
+                return Err(doc.err(
+                    obj,
+                    format!(
+                        "<{tag}> is not supported in mcrt (supported at the top level: sensor, \
+                         integrator, shape, emitter, bsdf, texture)"
+                    ),
+                ))
+            }
+        }
+    }
+    scene.finish()?;
+    Ok(b.desc)
+}
+
+impl<'a> Builder<'a> {
+    fn props(&self, e: &'a Elem) -> Result<Props<'a>> {
+        Props::new(self.doc, &self.ids, e)
+    }
+
+    fn warn(&mut self, e: &Elem, msg: impl Into<String>) {
+        let w = format!(
+            "{}:{}:{}: {}",
+            self.doc.files[e.file].display(),
+            e.pos.0,
+            e.pos.1,
+            msg.into()
+        );
+        self.desc.warnings.push(w);
+    }
+
+    fn path_of(&self, e: &Elem, name: &str) -> PathBuf {
+        self.doc.files[e.file]
+            .parent()
+            .unwrap_or(std::path::Path::new("."))
+            .join(name)
+    }
+
+    fn sensor(&mut self, e: &'a Elem, index: usize) -> Result<()> {
+        let p = self.props(e)?;
+        let kind = p.kind()?;
+        if kind != "perspective" {
+            return Err(self.doc.err_attr(
+                e,
+                "type",
+                format!("sensor '{kind}' is not supported; mcrt has 'perspective'"),
+            ));
+        }
+        let fov = p.float_opt("fov")?.ok_or_else(|| {
+            self.doc.err(
+                e,
+                "a perspective sensor needs a 'fov' (focal_length is not supported)",
+            )
+        })?;
+        if !(fov > 0.0 && fov < 180.0) {
+            return Err(self
+                .doc
+                .err(e, format!("fov must be in (0, 180) degrees, got {fov}")));
+        }
+        let axis = p.string("fov_axis", "x")?;
+        let fov_axis = FovAxis::parse(axis).ok_or_else(|| {
+            self.doc.err(
+                e,
+                format!("fov_axis '{axis}': expected x, y, diagonal, smaller or larger"),
+            )
+        })?;
+        let m = p.transform("to_world")?;
+        // Clipping planes change nothing in a scene whose geometry lies between them; they
+        // are accepted for compatibility.
+        p.ignore("near_clip");
+        p.ignore("far_clip");
+        let origin = m.transform_point3(Vec3::ZERO);
+        let dir = m.transform_vector3(Vec3::Z);
+        let up = m.transform_vector3(Vec3::Y);
+        if dir.length_squared() == 0.0 || up.cross(dir).length_squared() == 0.0 {
+            return Err(self.doc.err(e, "the sensor's to_world is degenerate"));
+        }
+        let name = e.attr("id").map(str::to_string).unwrap_or_else(|| {
+            if index == 0 {
+                "default".into()
+            } else {
+                format!("sensor{index}")
+            }
+        });
+        self.desc.cameras.push((
+            name,
+            CameraDesc::Perspective {
+                origin,
+                target: origin + dir.normalize(),
+                up: up.normalize(),
+                fov,
+                fov_axis,
+            },
+        ));
+        for &obj in &p.objects {
+            match obj.tag.as_str() {
+                "film" if index == 0 => self.film(obj)?,
+                "sampler" if index == 0 => self.sampler(obj)?,
+                "film" | "sampler" => {}
+                tag => {
+                    return Err(self
+                        .doc
+                        .err(obj, format!("<{tag}> cannot be nested in a <sensor>")))
+                }
+            }
+        }
+        p.finish()
+    }
+
+    fn film(&mut self, e: &'a Elem) -> Result<()> {
+        let p = self.props(e)?;
+        let kind = p.kind()?;
+        if kind != "hdrfilm" {
+            return Err(self.doc.err_attr(
+                e,
+                "type",
+                format!("film '{kind}' is not supported; mcrt has 'hdrfilm'"),
+            ));
+        }
+        let positive = |name: &'static str, v: i64| -> Result<u32> {
+            if (1..=1 << 20).contains(&v) {
+                Ok(v as u32)
+            } else {
+                Err(self
+                    .doc
+                    .err(e, format!("film {name} must be at least 1, got {v}")))
+            }
+        };
+        // Mitsuba's defaults.
+        let w = positive("width", p.int("width", 768)?)?;
+        let h = positive("height", p.int("height", 576)?)?;
+        self.desc.settings.width = Some(w);
+        self.desc.settings.height = Some(h);
+        let cx = p.int("crop_offset_x", 0)?;
+        let cy = p.int("crop_offset_y", 0)?;
+        let cw = p.int("crop_width", w as i64 - cx)?;
+        let ch = p.int("crop_height", h as i64 - cy)?;
+        if cx < 0 || cy < 0 || cw < 1 || ch < 1 || cx + cw > w as i64 || cy + ch > h as i64 {
+            return Err(self.doc.err(
+                e,
+                format!(
+                    "the crop window ({cx}, {cy}) + ({cw} × {ch}) does not fit in the {w} × {h} \
+                     film"
+                ),
+            ));
+        }
+        if (cx, cy, cw, ch) != (0, 0, w as i64, h as i64) {
+            self.desc.settings.crop = Some([cx as u32, cy as u32, cw as u32, ch as u32]);
+        }
+        // Output details the extension of `-o` decides in mcrt.
+        for name in [
+            "pixel_format",
+            "component_format",
+            "file_format",
+            "banner",
+            "sample_border",
+        ] {
+            p.ignore(name);
+        }
+        for &obj in &p.objects {
+            if obj.tag != "rfilter" {
+                return Err(self
+                    .doc
+                    .err(obj, format!("<{}> cannot be nested in a <film>", obj.tag)));
+            }
+            let f = self.props(obj)?;
+            let kind = f.kind()?;
+            if kind != "box" {
+                self.warn(
+                    obj,
+                    format!("rfilter '{kind}' is rendered with mcrt's box filter"),
+                );
+            }
+            for name in ["radius", "stddev", "lobes", "B", "C"] {
+                f.ignore(name);
+            }
+            f.finish()?;
+        }
+        p.finish()
+    }
+
+    fn sampler(&mut self, e: &'a Elem) -> Result<()> {
+        let p = self.props(e)?;
+        p.kind()?; // any type: mcrt's own sampler is used
+        let spp = p.int("sample_count", 4)?;
+        if !(1..=1 << 24).contains(&spp) {
+            return Err(self
+                .doc
+                .err(e, format!("sample_count must be at least 1, got {spp}")));
+        }
+        self.desc.settings.spp = Some(spp as u32);
+        let seed = p.int("seed", 0)?;
+        self.desc.settings.seed = Some(seed as u64);
+        for name in ["jitter", "scramble_seed", "pixel_format", "dimension"] {
+            p.ignore(name);
+        }
+        p.finish()
+    }
+
+    fn integrator(&mut self, e: &'a Elem) -> Result<()> {
+        let p = self.props(e)?;
+        let kind = p.kind()?;
+        let s = &mut self.desc.settings;
+        match kind {
+            // Without participating media (not supported), volpath is path.
+            "path" | "volpath" => {
+                s.integrator = Some(IntegratorKind::Path);
+                let rr = p.int("rr_depth", 5)?;
+                if rr < 1 {
+                    return Err(self
+                        .doc
+                        .err(e, format!("rr_depth must be at least 1, got {rr}")));
+                }
+                s.rr_depth = Some(rr as u32);
+            }
+            "direct" => {
+                s.integrator = Some(IntegratorKind::Direct);
+                // Mitsuba's direct integrator stops at the first surface: it does not follow
+                // mirrors and glass as mcrt's native `direct` does.
+                s.specular_chain = Some(false);
+                let n = p.int("emitter_samples", p.int("shadow_samples", 1)?)?;
+                if n < 1 {
+                    return Err(self.doc.err(e, "emitter_samples must be at least 1"));
+                }
+                s.shadow_rays = Some(n as u32);
+                if p.int("bsdf_samples", 1)? != 1 {
+                    return Err(self
+                        .doc
+                        .err(e, "mcrt's direct integrator takes one BSDF sample"));
+                }
+            }
+            _ => {
+                return Err(self.doc.err_attr(
+                    e,
+                    "type",
+                    format!("integrator '{kind}' is not supported; mcrt has 'path' and 'direct'"),
+                ))
+            }
+        }
+        let d = p.int("max_depth", -1)?;
+        s.max_depth = match d {
+            -1 => None,
+            d if d >= 0 => Some(d as u32),
+            d => {
+                return Err(self
+                    .doc
+                    .err(e, format!("max_depth must be -1 or ≥ 0, got {d}")))
+            }
+        };
+        let hide = p.bool("hide_emitters", false)?;
+        self.desc.settings.hide_emitters = Some(hide);
+        p.finish()
+    }
+
+    /// The material index of a BSDF element (converted once, shared by reference).
+    fn material(&mut self, e: &'a Elem) -> Result<u32> {
+        if let Some(&i) = self.materials.get(&(e as *const Elem)) {
+            return Ok(i);
+        }
+        let m = self.bsdf(e, false)?;
+        self.desc.materials.push(m);
+        let i = (self.desc.materials.len() - 1) as u32;
+        self.materials.insert(e as *const Elem, i);
+        Ok(i)
+    }
+
+    fn default_material(&mut self) -> u32 {
+        *self.default_material.get_or_insert_with(|| {
+            // Mitsuba gives shapes without a BSDF a grey diffuse one.
+            self.desc.materials.push(Material::new(
+                Bsdf::Lambert(Lambert {
+                    albedo: Color::splat(0.5),
+                }),
+                false,
+            ));
+            (self.desc.materials.len() - 1) as u32
+        })
+    }
+
+    fn reflectance(&mut self, p: &Props<'a>, name: &'static str, default: f32) -> Result<Color> {
+        match p.color_src(name, Color::splat(default))? {
+            ColorSrc::Const(c) => Ok(c),
+            ColorSrc::Texture(t) => Err(self.doc.err(t, "textures are not supported yet")),
+        }
+    }
+
+    fn bsdf(&mut self, e: &'a Elem, two_sided: bool) -> Result<Material> {
+        let p = self.props(e)?;
+        let kind = p.kind()?;
+        let bsdf = match kind {
+            "twosided" => {
+                let inner: Vec<&Elem> = p
+                    .objects
+                    .iter()
+                    .copied()
+                    .filter(|o| o.tag == "bsdf")
+                    .collect();
+                if inner.len() != 1 || p.objects.len() != 1 {
+                    return Err(self.doc.err(
+                        e,
+                        "twosided needs exactly one nested BSDF (different front and back BSDFs \
+                         are not supported)",
+                    ));
+                }
+                p.finish()?;
+                return self.bsdf(inner[0], true);
+            }
+            "diffuse" => Bsdf::Lambert(Lambert {
+                albedo: self.reflectance(&p, "reflectance", 0.5)?,
+            }),
+            "dielectric" => {
+                let int = ior(&p, "int_ior", 1.5046)?;
+                let ext = ior(&p, "ext_ior", 1.000277)?;
+                for name in ["specular_reflectance", "specular_transmittance"] {
+                    if p.color(name, Color::ONE)? != Color::ONE {
+                        return Err(self.doc.err(
+                            e,
+                            format!("dielectric {name} other than 1 is not supported"),
+                        ));
+                    }
+                }
+                Bsdf::Dielectric(Dielectric { eta: int / ext })
+            }
+            "conductor" => {
+                let material = p.string("material", "none")?;
+                let r = p.color("specular_reflectance", Color::ONE)?;
+                if material != "none" || p.has("eta") || p.has("k") {
+                    return Err(self.doc.err(
+                        e,
+                        "conductor materials other than 'none' are not supported yet",
+                    ));
+                }
+                Bsdf::Mirror(Mirror { reflectance: r })
+            }
+            _ => {
+                if self.lenient {
+                    self.warn(
+                        e,
+                        format!("bsdf '{kind}' replaced by grey diffuse (--lenient)"),
+                    );
+                    return Ok(Material::new(
+                        Bsdf::Lambert(Lambert {
+                            albedo: Color::splat(0.5),
+                        }),
+                        two_sided,
+                    ));
+                }
+                return Err(self.doc.err_attr(
+                    e,
+                    "type",
+                    format!(
+                        "bsdf '{kind}' is not supported; mcrt has diffuse, dielectric, \
+                         thindielectric, roughdielectric, conductor, roughconductor, plastic, \
+                         roughplastic and twosided (--lenient renders it grey diffuse)"
+                    ),
+                ));
+            }
+        };
+        p.finish()?;
+        Ok(Material::new(bsdf, two_sided))
+    }
+
+    fn shape(&mut self, e: &'a Elem) -> Result<()> {
+        let p = self.props(e)?;
+        let kind = p.kind()?;
+        let m = p.transform("to_world")?;
+        let flip = p.bool("flip_normals", false)?;
+        let geometry = match kind {
+            "rectangle" => GeometryDesc::Mesh(mesh(
+                &[[-1., -1., 0.], [1., -1., 0.], [1., 1., 0.], [-1., 1., 0.]],
+                &[[0, 1, 2], [0, 2, 3]],
+                m,
+                flip,
+            )),
+            "cube" => GeometryDesc::Mesh(cube(m, flip)),
+            "disk" => GeometryDesc::Mesh(disk(m, flip)),
+            "sphere" => {
+                let c = p.vec3_opt("center")?.unwrap_or(Vec3::ZERO);
+                let r = p.float("radius", 1.0)?;
+                if !(r > 0.0) {
+                    return Err(self
+                        .doc
+                        .err(e, format!("sphere radius must be positive, got {r}")));
+                }
+                let full = m * Mat4::from_translation(c) * Mat4::from_scale(Vec3::splat(r));
+                let cols = [
+                    full.x_axis.truncate(),
+                    full.y_axis.truncate(),
+                    full.z_axis.truncate(),
+                ];
+                let s = cols[0].length();
+                if cols.iter().any(|c| (c.length() - s).abs() > 1e-4 * s)
+                    || cols[0].dot(cols[1]).abs() > 1e-4 * s * s
+                    || cols[1].dot(cols[2]).abs() > 1e-4 * s * s
+                    || cols[0].dot(cols[2]).abs() > 1e-4 * s * s
+                {
+                    return Err(self.doc.err(
+                        e,
+                        "a sphere's to_world may only translate, rotate and scale uniformly",
+                    ));
+                }
+                if flip {
+                    return Err(self.doc.err(e, "flip_normals on a sphere is not supported"));
+                }
+                GeometryDesc::Sphere {
+                    center: full.transform_point3(Vec3::ZERO),
+                    radius: s,
+                }
+            }
+            "obj" => {
+                let name = p
+                    .string_opt("filename")?
+                    .ok_or_else(|| self.doc.err(e, "an obj shape needs a 'filename'"))?;
+                let mut mesh = load_obj(&self.path_of(e, name))?;
+                if p.bool("face_normals", false)? {
+                    mesh.normals = None;
+                }
+                mesh.transform(&m);
+                if flip {
+                    flip_mesh(&mut mesh);
+                }
+                GeometryDesc::Mesh(mesh)
+            }
+            _ => {
+                return Err(self.doc.err_attr(
+                    e,
+                    "type",
+                    format!(
+                        "shape '{kind}' is not supported; mcrt has obj, ply, rectangle, cube, \
+                         sphere and disk"
+                    ),
+                ))
+            }
+        };
+        let mut material = None;
+        let mut emission = None;
+        for &obj in &p.objects {
+            match obj.tag.as_str() {
+                "bsdf" => {
+                    if material.is_some() {
+                        return Err(self.doc.err(obj, "a shape has one BSDF"));
+                    }
+                    material = Some(self.material(obj)?);
+                }
+                "emitter" => {
+                    let ep = self.props(obj)?;
+                    let k = ep.kind()?;
+                    if k != "area" {
+                        return Err(self.doc.err_attr(
+                            obj,
+                            "type",
+                            format!("emitter '{k}' cannot be attached to a shape; use 'area'"),
+                        ));
+                    }
+                    emission = Some(ep.color("radiance", Color::ONE)?);
+                    ep.finish()?;
+                }
+                tag => {
+                    return Err(self
+                        .doc
+                        .err(obj, format!("<{tag}> cannot be nested in a <shape>")))
+                }
+            }
+        }
+        let material = match material {
+            Some(m) => m,
+            None => self.default_material(),
+        };
+        p.finish()?;
+        self.desc.shapes.push(ShapeDesc {
+            geometry,
+            material,
+            emission,
+        });
+        Ok(())
+    }
+
+    fn emitter(&mut self, e: &'a Elem) -> Result<()> {
+        let p = self.props(e)?;
+        let kind = p.kind()?;
+        let light = match kind {
+            "point" => {
+                let m = p.transform("to_world")?;
+                let pos = p.vec3_opt("position")?.unwrap_or(Vec3::ZERO);
+                LightDesc::Point {
+                    position: m.transform_point3(pos),
+                    intensity: p.color("intensity", Color::ONE)?,
+                }
+            }
+            "directional" => {
+                let m = p.transform("to_world")?;
+                let d = p.vec3_opt("direction")?.unwrap_or(Vec3::Z);
+                let d = m.transform_vector3(d).try_normalize().ok_or_else(|| self.doc.err(e, "the direction is zero"))?;
+                LightDesc::Directional {
+                    direction: d,
+                    irradiance: p.color("irradiance", Color::ONE)?,
+                }
+            }
+            "constant" => LightDesc::Constant {
+                radiance: p.color("radiance", Color::ONE)?,
+            },
+            "area" => return Err(self.doc.err(e, "an area emitter must be nested in a <shape>")),
+            _ => {
+                return Err(self.doc.err_attr(
+                    e,
+                    "type",
+                    format!("emitter '{kind}' is not supported; mcrt has area, point, directional and constant"),
+                ))
+            }
+        };
+        p.finish()?;
+        self.desc.lights.push(light);
+        Ok(())
+    }
+}
+
+/// A mesh from local vertices and triangles, moved to the world by `m`.
+fn mesh(v: &[[f32; 3]], idx: &[[u32; 3]], m: Mat4, flip: bool) -> TriangleMesh {
+    let mut mesh = TriangleMesh {
+        positions: v.iter().map(|p| Vec3::from_array(*p)).collect(),
+        normals: None,
+        indices: idx.to_vec(),
+    };
+    mesh.transform(&m);
+    if flip {
+        flip_mesh(&mut mesh);
+    }
+    mesh
+}
+
+fn flip_mesh(mesh: &mut TriangleMesh) {
+    for t in &mut mesh.indices {
+        t.swap(1, 2);
+    }
+    if let Some(ns) = &mut mesh.normals {
+        for n in ns {
+            *n = -*n;
+        }
+    }
+}
+
+/// Mitsuba's `cube`: [−1, 1]³ with outward faces.
+fn cube(m: Mat4, flip: bool) -> TriangleMesh {
+    let mut v = Vec::new();
+    let mut idx = Vec::new();
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            let mut n = [0.0f32; 3];
+            n[axis] = sign;
+            let n = Vec3::from_array(n);
+            // Tangents with u × v = n.
+            let u = Vec3::from_array({
+                let mut a = [0.0; 3];
+                a[(axis + 1) % 3] = 1.0;
+                a
+            });
+            let w = n.cross(u);
+            let base = v.len() as u32;
+            for (a, b) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+                v.push((n + u * a + w * b).to_array());
+            }
+            idx.push([base, base + 1, base + 2]);
+            idx.push([base, base + 2, base + 3]);
+        }
+    }
+    mesh(&v, &idx, m, flip)
+}
+
+/// Mitsuba's `disk`: the unit disk in the xy plane, facing +z, as a polygon of equal area.
+fn disk(m: Mat4, flip: bool) -> TriangleMesh {
+    let n = DISK_SEGMENTS;
+    let step = std::f32::consts::TAU / n as f32;
+    // Area of the regular n-gon of circumradius R: (n/2)·R²·sin(2π/n) = π.
+    let r = (std::f32::consts::TAU / (n as f32 * step.sin())).sqrt();
+    let mut v = vec![[0.0, 0.0, 0.0]];
+    for i in 0..n {
+        let a = i as f32 * step;
+        v.push([r * a.cos(), r * a.sin(), 0.0]);
+    }
+    let idx: Vec<[u32; 3]> = (0..n).map(|i| [0, 1 + i, 1 + (i + 1) % n]).collect();
+    mesh(&v, &idx, m, flip)
+}
+
+/// An index of refraction: a number or one of Mitsuba's named materials.
+fn ior(p: &Props, name: &'static str, default: f32) -> Result<f32> {
+    if !p.has(name) {
+        return Ok(default);
+    }
+    if let Some(s) = p.string_opt(name).ok().flatten() {
+        return named_ior(s).ok_or_else(|| {
+            p.doc.err(
+                p.owner,
+                format!(
+                    "{name}: unknown material '{s}'; give a number or one of {}",
+                    IORS.iter().map(|i| i.0).collect::<Vec<_>>().join(", ")
+                ),
+            )
+        });
+    }
+    let v = p.float(name, default)?;
+    if !(v > 0.0) {
+        return Err(p
+            .doc
+            .err(p.owner, format!("{name} must be positive, got {v}")));
+    }
+    Ok(v)
+}
+
+/// Mitsuba 3's table of named indices of refraction (include/mitsuba/core/... `ior.h`).
+const IORS: &[(&str, f32)] = &[
+    ("vacuum", 1.0),
+    ("helium", 1.000036),
+    ("hydrogen", 1.000132),
+    ("air", 1.000277),
+    ("carbon dioxide", 1.00045),
+    ("water", 1.3330),
+    ("acetone", 1.36),
+    ("ethanol", 1.361),
+    ("carbon tetrachloride", 1.461),
+    ("glycerol", 1.4729),
+    ("benzene", 1.501),
+    ("silicone oil", 1.52045),
+    ("bromine", 1.661),
+    ("water ice", 1.31),
+    ("fused quartz", 1.458),
+    ("pyrex", 1.470),
+    ("acrylic glass", 1.49),
+    ("polypropylene", 1.49),
+    ("bk7", 1.5046),
+    ("sodium chloride", 1.544),
+    ("amber", 1.55),
+    ("pet", 1.5750),
+    ("diamond", 2.419),
+];
+
+fn named_ior(s: &str) -> Option<f32> {
+    let s = s.trim().to_ascii_lowercase();
+    IORS.iter().find(|(n, _)| *n == s).map(|i| i.1)
+}
