@@ -239,7 +239,7 @@ fn render(a: RenderArgs) -> Result<(), Error> {
             settings.spp,
             settings.params.kind.name(),
             scene.prims.len(),
-            scene.lights.lights.len(),
+            scene.lights.lights.len() + scene.lights.others.len(),
             load_time.as_secs_f64(),
             secs,
             stats.samples as f64 / secs / 1e6,

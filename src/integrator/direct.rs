@@ -3,7 +3,7 @@
 //! report's Figure 3.1). The direct light is estimated with shadow rays and one BSDF sample,
 //! combined by MIS.
 
-use super::{emitted, sample_lights, IntegratorParams, RayStats};
+use super::{emitted, escaped, sample_lights, IntegratorParams, RayStats};
 use crate::geometry::{Frame, Ray};
 use crate::material::TransportMode;
 use crate::sampler::Sampler;
@@ -29,10 +29,16 @@ pub fn li(
     let mut depth = 0u32;
     loop {
         stats.rays += 1;
+        let hidden = depth == 0 && p.hide_emitters;
         let Some(si) = scene.intersect(&ray) else {
+            if !hidden {
+                l += beta * escaped(scene, None, p.shadow_rays);
+            }
             break;
         };
-        l += beta * emitted(scene, &si, ray.d, None, p.shadow_rays);
+        if !hidden {
+            l += beta * emitted(scene, &si, ray.d, None, p.shadow_rays);
+        }
         if depth + 1 >= max_depth || depth >= MAX_SPECULAR_CHAIN {
             break;
         }
@@ -44,7 +50,7 @@ pub fn li(
         let wo = frame.to_local(-ray.d);
         let u1 = sampler.next_1d();
         let u2 = sampler.next_2d();
-        if material.is_specular() {
+        if material.is_specular() && p.specular_chain {
             let Some(bs) = material.sample(wo, u1, u2, TransportMode::Radiance) else {
                 break;
             };
@@ -70,10 +76,13 @@ pub fn li(
         if let Some(bs) = material.sample(wo, u1, u2, TransportMode::Radiance) {
             let ray2 = si.spawn_ray(frame.to_world(bs.wi));
             stats.rays += 1;
-            if let Some(si2) = scene.intersect(&ray2) {
-                l += beta
-                    * bs.weight
-                    * emitted(scene, &si2, ray2.d, Some((si.p, bs.pdf)), p.shadow_rays);
+            // After a specular sample there is no light sample to weigh against.
+            let prev = (!bs.specular).then_some((si.p, bs.pdf));
+            match scene.intersect(&ray2) {
+                Some(si2) => {
+                    l += beta * bs.weight * emitted(scene, &si2, ray2.d, prev, p.shadow_rays)
+                }
+                None => l += beta * bs.weight * escaped(scene, prev, p.shadow_rays),
             }
         }
         break;

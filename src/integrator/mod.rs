@@ -131,15 +131,36 @@ pub(crate) fn sample_lights(
         if f == Color::ZERO {
             continue;
         }
-        let (ray, t_max) = si.spawn_ray_to(ls.p, ls.p_err, ls.n);
+        let (ray, t_max) = if ls.infinite {
+            (si.spawn_ray(ls.wi), f32::INFINITY)
+        } else {
+            si.spawn_ray_to(ls.p, ls.p_err, ls.n)
+        };
         stats.shadow_rays += 1;
         if scene.occluded(&ray, t_max) {
             continue;
         }
-        let w = power_heuristic(n as f32 * ls.pdf, material.pdf(wo, wi));
+        let w = if ls.delta {
+            1.0
+        } else {
+            power_heuristic(n as f32 * ls.pdf, material.pdf(wo, wi))
+        };
         sum += f * ls.le * (w / ls.pdf);
     }
     sum / n as f32
+}
+
+/// Radiance of the environment along a ray `d` that left the scene, weighted against light
+/// sampling as `emitted` is.
+#[inline]
+pub(crate) fn escaped(scene: &Scene, prev: Option<(Vec3A, f32)>, shadow_rays: u32) -> Color {
+    let Some((le, light_pdf)) = scene.lights.environment() else {
+        return Color::ZERO;
+    };
+    match prev {
+        None => le,
+        Some((_, bsdf_pdf)) => le * power_heuristic(bsdf_pdf, shadow_rays as f32 * light_pdf),
+    }
 }
 
 /// Emission seen at `si` along `-d`, weighted against light sampling from the previous

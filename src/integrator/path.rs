@@ -1,7 +1,7 @@
 //! Path tracing with next-event estimation, MIS and Russian roulette (Kajiya 1986; Veach 1997
 //! ch. 9; the structure follows pbrt-v4's `PathIntegrator` and Mitsuba 3's `path`).
 
-use super::{emitted, sample_lights, IntegratorParams, RayStats, RussianRoulette};
+use super::{emitted, escaped, sample_lights, IntegratorParams, RayStats, RussianRoulette};
 use crate::geometry::{Frame, Ray};
 use crate::material::TransportMode;
 use crate::sampler::Sampler;
@@ -28,10 +28,16 @@ pub fn li(
     let mut depth = 0u32; // segments traced so far, minus one
     loop {
         stats.rays += 1;
+        let hidden = depth == 0 && p.hide_emitters;
         let Some(si) = scene.intersect(&ray) else {
+            if !hidden {
+                l += beta * escaped(scene, prev, p.shadow_rays);
+            }
             break;
         };
-        l += beta * emitted(scene, &si, ray.d, prev, p.shadow_rays);
+        if !hidden {
+            l += beta * emitted(scene, &si, ray.d, prev, p.shadow_rays);
+        }
         // A further vertex would make the path longer than max_depth segments.
         if depth + 1 >= max_depth {
             break;

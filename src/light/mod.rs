@@ -63,6 +63,33 @@ impl AreaLight {
     }
 }
 
+/// A light that is not a surface: a point, a direction, or the environment.
+#[derive(Clone, Copy, Debug)]
+pub enum OtherLight {
+    /// Intensity I (W/sr) from a point.
+    Point { p: Vec3A, intensity: Color },
+    /// Irradiance E along `dir` (the direction the light travels).
+    Directional { dir: Vec3A, irradiance: Color },
+    /// Constant radiance from every direction.
+    Constant { radiance: Color },
+}
+
+impl OtherLight {
+    /// Power, for choosing among lights; `radius` bounds the scene (pbrt-v4's convention
+    /// for lights at infinity: the power that crosses a disk of that radius).
+    fn power(&self, radius: f32) -> f32 {
+        let mean = |c: Color| (c.x + c.y + c.z) / 3.0;
+        let disk = std::f32::consts::PI * radius * radius;
+        match self {
+            OtherLight::Point { intensity, .. } => 4.0 * std::f32::consts::PI * mean(*intensity),
+            OtherLight::Directional { irradiance, .. } => disk * mean(*irradiance),
+            OtherLight::Constant { radiance } => {
+                4.0 * std::f32::consts::PI * disk * mean(*radiance)
+            }
+        }
+    }
+}
+
 /// A sampled point on a light, seen from a shading point.
 #[derive(Clone, Copy, Debug)]
 pub struct LightSample {
@@ -72,27 +99,53 @@ pub struct LightSample {
     /// Unit direction from the shading point to the light point.
     pub wi: Vec3A,
     pub le: Color,
-    /// Solid-angle density, including the probability of choosing this light.
+    /// Solid-angle density, including the probability of choosing this light; for a delta
+    /// light (point, directional) only that probability.
     pub pdf: f32,
+    /// A point or directional light: no BSDF sample can find it, so no MIS.
+    pub delta: bool,
+    /// The light is at infinity along `wi` (shadow rays are unbounded).
+    pub infinite: bool,
 }
 
 #[derive(Clone, Debug, Default)]
 pub struct Lights {
+    /// Area lights, indexed by the `light` of the primitives that emit.
     pub lights: Vec<AreaLight>,
+    /// Point, directional and environment lights.
+    pub others: Vec<OtherLight>,
+    /// Over area lights, then the others, by power.
     distribution: Distribution1D,
+    /// Index in `others` of the constant environment light, if any.
+    env: Option<usize>,
 }
 
 impl Lights {
     pub fn new(lights: Vec<AreaLight>) -> Self {
-        let powers: Vec<f32> = lights.iter().map(|l| l.power()).collect();
+        Self::with_others(lights, Vec::new(), 1.0)
+    }
+
+    /// `radius`: the scene's bounding-sphere radius, which sets the power of lights at
+    /// infinity relative to the others.
+    pub fn with_others(lights: Vec<AreaLight>, others: Vec<OtherLight>, radius: f32) -> Self {
+        let powers: Vec<f32> = lights
+            .iter()
+            .map(|l| l.power())
+            .chain(others.iter().map(|o| o.power(radius)))
+            .collect();
+        let env = others
+            .iter()
+            .position(|o| matches!(o, OtherLight::Constant { .. }));
         Lights {
             distribution: Distribution1D::new(&powers),
             lights,
+            others,
+            env,
         }
     }
 
     pub fn is_empty(&self) -> bool {
-        self.lights.is_empty()
+        self.lights.is_empty() && self.others.is_empty()
     }
 
     /// Radiance leaving light `id` at a point with normal `n` in direction `w` (unit).
@@ -105,11 +158,25 @@ impl Lights {
         }
     }
 
+    /// Radiance arriving along a ray that leaves the scene, and the solid-angle density with
+    /// which light sampling would have chosen its direction.
+    #[inline]
+    pub fn environment(&self) -> Option<(Color, f32)> {
+        let i = self.env?;
+        let OtherLight::Constant { radiance } = self.others[i] else {
+            return None;
+        };
+        let pmf = self.distribution.pmf(self.lights.len() + i);
+        Some((radiance, pmf / (4.0 * std::f32::consts::PI)))
+    }
+
     /// Samples a light and a point on it as seen from `p`.
     #[inline]
     pub fn sample(&self, p: Vec3A, u_select: f32, u: Vec2) -> Option<LightSample> {
         let (id, pmf) = self.distribution.sample_discrete(u_select)?;
-        let light = &self.lights[id];
+        let Some(light) = self.lights.get(id) else {
+            return self.sample_other(id - self.lights.len(), pmf, p, u);
+        };
         let (pl, n, p_err) = light.sample_point(u);
         let d = pl - p;
         let dist2 = d.length_squared();
@@ -129,6 +196,55 @@ impl Lights {
             wi,
             le: light.radiance,
             pdf,
+            delta: false,
+            infinite: false,
+        })
+    }
+
+    #[cold]
+    fn sample_other(&self, i: usize, pmf: f32, p: Vec3A, u: Vec2) -> Option<LightSample> {
+        Some(match self.others[i] {
+            OtherLight::Point { p: pl, intensity } => {
+                let d = pl - p;
+                let dist2 = d.length_squared();
+                if dist2 == 0.0 {
+                    return None;
+                }
+                let wi = d / dist2.sqrt();
+                LightSample {
+                    p: pl,
+                    n: -wi,
+                    p_err: Vec3A::ZERO,
+                    wi,
+                    le: intensity / dist2,
+                    pdf: pmf,
+                    delta: true,
+                    infinite: false,
+                }
+            }
+            OtherLight::Directional { dir, irradiance } => LightSample {
+                p: p - dir,
+                n: dir,
+                p_err: Vec3A::ZERO,
+                wi: -dir,
+                le: irradiance,
+                pdf: pmf,
+                delta: true,
+                infinite: true,
+            },
+            OtherLight::Constant { radiance } => {
+                let wi = crate::material::sampling::square_to_uniform_sphere(u);
+                LightSample {
+                    p: p + wi,
+                    n: -wi,
+                    p_err: Vec3A::ZERO,
+                    wi,
+                    le: radiance,
+                    pdf: pmf / (4.0 * std::f32::consts::PI),
+                    delta: false,
+                    infinite: true,
+                }
+            }
         })
     }
 

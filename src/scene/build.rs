@@ -1,10 +1,12 @@
 //! Turning a scene description into the scene the integrators trace: primitives in BVH order,
 //! materials, and one area light per emissive triangle or sphere.
 
-use super::{desc::GeometryDesc, Primitive, Scene, SceneDesc, Shape, NO_LIGHT, NO_NORMALS};
+use super::{
+    desc::GeometryDesc, desc::LightDesc, Primitive, Scene, SceneDesc, Shape, NO_LIGHT, NO_NORMALS,
+};
 use crate::accel::{Bvh, WideBvh};
 use crate::geometry::{Aabb, Sphere, Triangle};
-use crate::light::{AreaLight, LightShape, Lights};
+use crate::light::{AreaLight, LightShape, Lights, OtherLight};
 use glam::Vec3A;
 
 impl Scene {
@@ -72,13 +74,43 @@ impl Scene {
                 }
             }
         }
+        let mut world = Aabb::EMPTY;
+        for b in &bounds {
+            world = Aabb::union(&world, b);
+        }
+        let radius = if bounds.is_empty() {
+            1.0
+        } else {
+            0.5 * (world.max - world.min).length()
+        };
+        let others = desc
+            .lights
+            .iter()
+            .map(|l| match *l {
+                LightDesc::Point {
+                    position,
+                    intensity,
+                } => OtherLight::Point {
+                    p: position.into(),
+                    intensity,
+                },
+                LightDesc::Directional {
+                    direction,
+                    irradiance,
+                } => OtherLight::Directional {
+                    dir: Vec3A::from(direction).normalize(),
+                    irradiance,
+                },
+                LightDesc::Constant { radiance } => OtherLight::Constant { radiance },
+            })
+            .collect();
         let bvh = Bvh::build(&bounds);
         let prims = bvh.order.iter().map(|&i| prims[i as usize]).collect();
         Scene {
             prims,
             bvh: WideBvh::from_binary(&bvh),
             materials: desc.materials,
-            lights: Lights::new(lights),
+            lights: Lights::with_others(lights, others, radius),
             normals,
             cameras: desc.cameras,
             desc_settings: desc.settings,
