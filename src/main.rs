@@ -185,7 +185,7 @@ fn render(a: RenderArgs) -> Result<(), Error> {
         return Err(SceneError::new(
             &a.scene,
             None,
-            "the scene defines no camera (add a [[camera]] table)",
+            "the scene defines no camera (add a [[camera]] table, or a <sensor> in Mitsuba XML)",
         )
         .into());
     }

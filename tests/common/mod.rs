@@ -2,6 +2,8 @@
 //! comparing block means against a reference with tolerances derived from measured noise.
 #![allow(dead_code)]
 
+pub mod cli;
+
 use mcrt::image::{read_exr, Image};
 use mcrt::render::RenderSettings;
 use mcrt::sampler::SamplerKind;
