@@ -81,6 +81,7 @@ fn inward_box() -> TriangleMesh {
     TriangleMesh {
         positions,
         normals: None,
+        uvs: None,
         indices,
     }
 }

@@ -79,6 +79,7 @@ fn mesh_shape(positions: Vec<Vec3>, indices: Vec<[u32; 3]>) -> ShapeDesc {
         geometry: GeometryDesc::Mesh(TriangleMesh {
             positions,
             normals: None,
+            uvs: None,
             indices,
         }),
         material: 0,

@@ -7,10 +7,42 @@ pub struct TriangleMesh {
     pub positions: Vec<Vec3>,
     /// Per-vertex shading normals, if the file gave them (same length as `positions`).
     pub normals: Option<Vec<Vec3>>,
+    /// Per-vertex texture coordinates, if the file gave them.
+    pub uvs: Option<Vec<glam::Vec2>>,
     pub indices: Vec<[u32; 3]>,
 }
 
 impl TriangleMesh {
+    /// v ↦ 1 − v: OBJ files put v = 0 at the bottom of an image, Mitsuba's textures at the
+    /// top (Mitsuba's `flip_tex_coords`, on by default).
+    pub fn flip_v(&mut self) {
+        if let Some(uvs) = &mut self.uvs {
+            for t in uvs {
+                t.y = 1.0 - t.y;
+            }
+        }
+    }
+
+    /// Smooth vertex normals: each face's normal weighted by its angle at the vertex
+    /// (Thürmer and Wüthrich 1998), as Mitsuba 3 computes them for meshes without normals.
+    pub fn recompute_vertex_normals(&mut self) {
+        let mut ns = vec![Vec3::ZERO; self.positions.len()];
+        for t in &self.indices {
+            let v = t.map(|i| self.positions[i as usize]);
+            let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
+            for i in 0..3 {
+                let d0 = (v[(i + 1) % 3] - v[i]).normalize_or_zero();
+                let d1 = (v[(i + 2) % 3] - v[i]).normalize_or_zero();
+                let angle = d0.dot(d1).clamp(-1.0, 1.0).acos();
+                ns[t[i] as usize] += n * angle;
+            }
+        }
+        for n in &mut ns {
+            *n = n.normalize_or_zero();
+        }
+        self.normals = Some(ns);
+    }
+
     pub fn triangle_count(&self) -> usize {
         self.indices.len()
     }

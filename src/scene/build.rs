@@ -7,7 +7,7 @@ use super::{
 use crate::accel::{Bvh, WideBvh};
 use crate::geometry::{Aabb, Sphere, Triangle};
 use crate::light::{AreaLight, LightShape, Lights, OtherLight};
-use glam::Vec3A;
+use glam::{Vec2, Vec3A};
 
 impl Scene {
     pub fn build(desc: SceneDesc) -> Scene {
@@ -15,6 +15,7 @@ impl Scene {
         let mut bounds = Vec::new();
         let mut lights = Vec::new();
         let mut normals = Vec::new();
+        let mut uvs = Vec::new();
         for shape in &desc.shapes {
             let emission = shape.emission.filter(|e| e.max_element() > 0.0);
             match &shape.geometry {
@@ -27,12 +28,19 @@ impl Scene {
                         if !(area > 0.0) {
                             continue;
                         }
-                        let nidx = match &mesh.normals {
-                            Some(ns) => {
-                                normals.push(idx.map(|i| Vec3A::from(ns[i as usize])));
-                                (normals.len() - 1) as u32
-                            }
-                            None => NO_NORMALS,
+                        let nidx = if mesh.normals.is_some() || mesh.uvs.is_some() {
+                            let n = tri.normal_unnormalized().normalize();
+                            normals.push(match &mesh.normals {
+                                Some(ns) => idx.map(|i| Vec3A::from(ns[i as usize])),
+                                None => [n; 3],
+                            });
+                            uvs.push(match &mesh.uvs {
+                                Some(ts) => idx.map(|i| ts[i as usize]),
+                                None => [Vec2::ZERO, Vec2::X, Vec2::Y],
+                            });
+                            (normals.len() - 1) as u32
+                        } else {
+                            NO_NORMALS
                         };
                         let light = match emission {
                             Some(e) => {
@@ -112,6 +120,7 @@ impl Scene {
             materials: desc.materials,
             lights: Lights::with_others(lights, others, radius),
             normals,
+            uvs,
             cameras: desc.cameras,
             desc_settings: desc.settings,
         }

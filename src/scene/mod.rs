@@ -21,7 +21,7 @@ use crate::geometry::ray::{offset_ray_origin, SHADOW_EPSILON};
 use crate::geometry::{Ray, Sphere, Triangle};
 use crate::light::Lights;
 use crate::material::Material;
-use glam::Vec3A;
+use glam::{Vec2, Vec3A};
 
 pub const NO_LIGHT: u32 = u32::MAX;
 pub const NO_NORMALS: u32 = u32::MAX;
@@ -52,6 +52,9 @@ pub struct Interaction {
     /// Unit shading normal, on the same side as `ng`.
     pub ns: Vec3A,
     pub t: f32,
+    /// Texture coordinates: the mesh's, interpolated; barycentric (b1, b2) on a mesh without
+    /// them; (φ/2π, θ/π) on a sphere (Mitsuba's conventions).
+    pub uv: Vec2,
     pub material: u32,
     pub light: u32,
 }
@@ -80,8 +83,10 @@ pub struct Scene {
     pub bvh: WideBvh,
     pub materials: Vec<Material>,
     pub lights: Lights,
-    /// Vertex normals of smooth-shaded triangles, three per entry.
+    /// Vertex normals and texture coordinates of triangles whose mesh has either (the
+    /// triangle's face normal, and barycentric uvs, stand in for what it lacks).
     pub normals: Vec<[Vec3A; 3]>,
+    pub uvs: Vec<[Vec2; 3]>,
     pub cameras: Vec<(String, CameraDesc)>,
     pub desc_settings: desc::FileSettings,
 }
@@ -131,24 +136,42 @@ impl Scene {
                 } else {
                     ng
                 };
+                let uv = if *nidx != NO_NORMALS {
+                    let [t0, t1, t2] = self.uvs[*nidx as usize];
+                    t0 * (1.0 - u - v) + t1 * u + t2 * v
+                } else {
+                    Vec2::new(u, v)
+                };
                 Interaction {
                     p,
                     p_err,
                     ng,
                     ns,
                     t: t_hit,
+                    uv,
                     material: prim.material,
                     light: prim.light,
                 }
             }
             Shape::Sphere(s) => {
                 let (p, n, p_err) = s.surface_point(ray.at(t_hit));
+                let phi = n.y.atan2(n.x);
+                let phi = if phi < 0.0 {
+                    phi + std::f32::consts::TAU
+                } else {
+                    phi
+                };
+                let uv = Vec2::new(
+                    phi / std::f32::consts::TAU,
+                    n.z.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
+                );
                 Interaction {
                     p,
                     p_err,
                     ng: n,
                     ns: n,
                     t: t_hit,
+                    uv,
                     material: prim.material,
                     light: prim.light,
                 }

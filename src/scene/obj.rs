@@ -18,10 +18,12 @@ pub fn load_obj(path: &Path) -> Result<TriangleMesh, SceneError> {
 pub fn parse_obj(path: &Path, text: &str) -> Result<TriangleMesh, SceneError> {
     let mut pos: Vec<Vec3> = Vec::new();
     let mut nrm: Vec<Vec3> = Vec::new();
+    let mut tex: Vec<glam::Vec2> = Vec::new();
     // Output vertices are (position, normal) pairs; faces without normals use (p, None).
-    let mut remap: HashMap<(u32, Option<u32>), u32> = HashMap::new();
+    let mut remap: HashMap<(u32, Option<u32>, Option<u32>), u32> = HashMap::new();
     let mut out_pos = Vec::new();
     let mut out_nrm: Vec<Option<Vec3>> = Vec::new();
+    let mut out_tex: Vec<Option<glam::Vec2>> = Vec::new();
     let mut indices = Vec::new();
     for (ln, line) in text.lines().enumerate() {
         let line_no = ln + 1;
@@ -52,6 +54,22 @@ pub fn parse_obj(path: &Path, text: &str) -> Result<TriangleMesh, SceneError> {
                     nrm.push(Vec3::from(c));
                 }
             }
+            "vt" => {
+                let mut c = [0.0f32; 2];
+                for (k, slot) in c.iter_mut().enumerate() {
+                    let (col, tok) = fields.next().ok_or_else(|| {
+                        err(line.len() + 1, format!("'vt' needs 2 numbers, found {k}"))
+                    })?;
+                    *slot = tok
+                        .parse::<f32>()
+                        .ok()
+                        .filter(|v| v.is_finite())
+                        .ok_or_else(|| {
+                            err(col, format!("expected a finite number, found '{tok}'"))
+                        })?;
+                }
+                tex.push(glam::Vec2::from(c));
+            }
             "f" => {
                 let mut corners = Vec::with_capacity(4);
                 for (col, tok) in fields.by_ref() {
@@ -77,13 +95,14 @@ pub fn parse_obj(path: &Path, text: &str) -> Result<TriangleMesh, SceneError> {
                     };
                     let vi = resolve(parts.next(), pos.len(), "vertex")?
                         .ok_or_else(|| err(col, "a face corner needs a vertex index".into()))?;
-                    let _vt = parts.next();
+                    let ti = resolve(parts.next(), tex.len(), "texture coordinate")?;
                     let ni = resolve(parts.next(), nrm.len(), "normal")?;
-                    let key = (vi, ni);
+                    let key = (vi, ti, ni);
                     let next = out_pos.len() as u32;
                     let id = *remap.entry(key).or_insert_with(|| {
                         out_pos.push(pos[vi as usize]);
                         out_nrm.push(ni.map(|n| nrm[n as usize]));
+                        out_tex.push(ti.map(|t| tex[t as usize]));
                         next
                     });
                     corners.push(id);
@@ -111,9 +130,16 @@ pub fn parse_obj(path: &Path, text: &str) -> Result<TriangleMesh, SceneError> {
     } else {
         None
     };
+    // As in the file: v up (importers flip it where their convention asks).
+    let uvs = if !out_tex.is_empty() && out_tex.iter().all(|t| t.is_some()) {
+        Some(out_tex.into_iter().map(|t| t.unwrap()).collect())
+    } else {
+        None
+    };
     Ok(TriangleMesh {
         positions: out_pos,
         normals,
+        uvs,
         indices,
     })
 }

@@ -29,13 +29,18 @@ pub struct PlyMesh {
 }
 
 impl PlyMesh {
-    /// The mesh as the renderer's [`TriangleMesh`] (texture coordinates are dropped).
+    /// The mesh as the renderer's [`TriangleMesh`].
     pub fn into_triangle_mesh(self) -> TriangleMesh {
         TriangleMesh {
             normals: if self.normals.is_empty() {
                 None
             } else {
                 Some(self.normals)
+            },
+            uvs: if self.uvs.is_empty() {
+                None
+            } else {
+                Some(self.uvs)
             },
             positions: self.positions,
             indices: self.indices,

@@ -10,7 +10,7 @@ use crate::geometry::mesh::TriangleMesh;
 use crate::integrator::IntegratorKind;
 use crate::material::{Bsdf, Dielectric, Lambert, Material, Mirror, OrenNayar};
 use crate::Color;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -385,9 +385,12 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                 } else {
                     vec![[0, 1, 2], [0, 2, 3]]
                 };
+                // A quad's corners get uv (0,0), (1,0), (1,1), (0,1), as Mitsuba's rectangle.
+                let uvs = (n == 4).then(|| vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y]);
                 GeometryDesc::Mesh(TriangleMesh {
                     positions,
                     normals: None,
+                    uvs,
                     indices,
                 })
             }
@@ -443,7 +446,9 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                                 ),
                             );
                         }
-                        load_obj(&p)?
+                        let mut m = load_obj(&p)?;
+                        m.flip_v();
+                        m
                     }
                     (None, Some(pos)) => {
                         let idx = cx.need(&s.indices, "indices", "a mesh with 'positions'", &at)?;
@@ -479,6 +484,7 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                         TriangleMesh {
                             positions: pos.get_ref().iter().map(|p| Vec3::from(*p)).collect(),
                             normals,
+                            uvs: None,
                             indices: idx.get_ref().clone(),
                         }
                     }

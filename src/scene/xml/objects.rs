@@ -9,8 +9,9 @@ use crate::integrator::IntegratorKind;
 use crate::material::{Bsdf, Dielectric, Lambert, Material, Mirror};
 use crate::scene::desc::{GeometryDesc, LightDesc, SceneDesc, ShapeDesc};
 use crate::scene::obj::load_obj;
+use crate::scene::ply::load_ply;
 use crate::Color;
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec2, Vec3};
 use std::collections::HashMap;
 use std::path::PathBuf;
 
@@ -463,13 +464,31 @@ impl<'a> Builder<'a> {
                     radius: s,
                 }
             }
-            "obj" => {
-                let name = p
-                    .string_opt("filename")?
-                    .ok_or_else(|| self.doc.err(e, "an obj shape needs a 'filename'"))?;
-                let mut mesh = load_obj(&self.path_of(e, name))?;
+            "obj" | "ply" => {
+                let name = p.string_opt("filename")?.ok_or_else(|| {
+                    self.doc
+                        .err(e, format!("a {kind} shape needs a 'filename'"))
+                })?;
+                let path = self.path_of(e, name);
+                let mut mesh = if kind == "obj" {
+                    let mut m = load_obj(&path)?;
+                    if p.bool("flip_tex_coords", true)? {
+                        m.flip_v();
+                    }
+                    m
+                } else {
+                    load_ply(&path)?.into_triangle_mesh()
+                };
+                if mesh.indices.is_empty() {
+                    return Err(self
+                        .doc
+                        .err(e, format!("'{}' holds no triangles", path.display())));
+                }
                 if p.bool("face_normals", false)? {
                     mesh.normals = None;
+                } else if mesh.normals.is_none() {
+                    // Mitsuba shades meshes without normals smoothly.
+                    mesh.recompute_vertex_normals();
                 }
                 mesh.transform(&m);
                 if flip {
@@ -575,8 +594,16 @@ fn mesh(v: &[[f32; 3]], idx: &[[u32; 3]], m: Mat4, flip: bool) -> TriangleMesh {
     let mut mesh = TriangleMesh {
         positions: v.iter().map(|p| Vec3::from_array(*p)).collect(),
         normals: None,
+        // Planar texture coordinates over [−1, 1]² (Mitsuba's rectangle; the disk and the
+        // cube's faces approximate Mitsuba's own maps).
+        uvs: Some(
+            v.iter()
+                .map(|p| Vec2::new(0.5 * p[0] + 0.5, 0.5 * p[1] + 0.5))
+                .collect(),
+        ),
         indices: idx.to_vec(),
     };
+
     mesh.transform(&m);
     if flip {
         flip_mesh(&mut mesh);
@@ -619,7 +646,11 @@ fn cube(m: Mat4, flip: bool) -> TriangleMesh {
             idx.push([base, base + 2, base + 3]);
         }
     }
-    mesh(&v, &idx, m, flip)
+    let mut cube = mesh(&v, &idx, m, flip);
+    // Each face spans the unit square of texture space.
+    let face = [Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y];
+    cube.uvs = Some((0..v.len()).map(|i| face[i % 4]).collect());
+    cube
 }
 
 /// Mitsuba's `disk`: the unit disk in the xy plane, facing +z, as a polygon of equal area.
