@@ -8,6 +8,7 @@ pub mod build;
 pub mod desc;
 pub mod error;
 pub mod obj;
+pub mod ply;
 pub mod toml;
 
 pub use desc::{GeometryDesc, SceneDesc, ShapeDesc};
