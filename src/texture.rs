@@ -10,9 +10,9 @@
 //! exactly as in Mitsuba 3, where the bitmap is a tensor of shape `[height, width, channels]`
 //! indexed by `(v · height, u · width)` (drjit `Texture::eval_nonaccel`, used by
 //! `BitmapTextureImpl::interpolate_3` in `src/textures/bitmap.cpp`). Mitsuba's mesh loaders flip
-//! v instead (`flip_tex_coords`, default true, in `obj.cpp` and `serialized.cpp`), so an OBJ
-//! `vt` of v = 1 ends on the top row; a mesh loader that wants Mitsuba's behaviour must apply
-//! `v ↦ 1 − v` itself.
+//! v instead, with their `flip_tex_coords` option: default true in `obj.cpp` (an OBJ `vt` with
+//! v = 1 ends on the top row), default false in `ply.cpp`. A mesh loader that wants Mitsuba's
+//! behaviour applies `v ↦ 1 − v` itself (OBJ), or nothing (PLY).
 //!
 //! Pixel (x, y) covers `[x/w, (x+1)/w] × [y/h, (y+1)/h]` and its centre is at
 //! `((x + ½)/w, (y + ½)/h)`:
