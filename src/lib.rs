@@ -16,6 +16,7 @@ pub mod material;
 pub mod render;
 pub mod sampler;
 pub mod scene;
+pub mod texture;
 
 use integrator::{IntegratorKind, IntegratorParams, RussianRoulette};
 use render::RenderSettings;

@@ -237,6 +237,16 @@ fn uv_name_variants() {
 }
 
 #[test]
+fn uv_name_preference_follows_mitsuba() {
+    // u/v first, then texture_u/texture_v, then s/t.
+    let text = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n\
+                property float z\nproperty float s\nproperty float t\nproperty float texture_u\n\
+                property float texture_v\nend_header\n0 0 0 0.1 0.2 0.3 0.4\n";
+    let m = load_bytes("uv_pref.ply", text.as_bytes()).unwrap();
+    assert_eq!(m.uvs, vec![Vec2::new(0.3, 0.4)]);
+}
+
+#[test]
 fn normals_are_normalized() {
     let text = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n\
                 property float z\nproperty float nx\nproperty float ny\nproperty float nz\n\

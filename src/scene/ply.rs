@@ -19,7 +19,8 @@ use std::path::Path;
 
 /// A mesh read from a PLY file. `normals` and `uvs` are empty when the file has none, else as
 /// long as `positions`. Normals are normalized (a zero normal stays zero); texture coordinates
-/// are as in the file (no flip of v).
+/// are as in the file, with no flip of v (as Mitsuba 3's `ply` shape with its default
+/// `flip_tex_coords = false`).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct PlyMesh {
     pub positions: Vec<Vec3>,
@@ -29,7 +30,7 @@ pub struct PlyMesh {
 }
 
 impl PlyMesh {
-    /// The mesh as the renderer's [`TriangleMesh`].
+    /// The mesh as the renderer's [`TriangleMesh`] .
     pub fn into_triangle_mesh(self) -> TriangleMesh {
         TriangleMesh {
             normals: if self.normals.is_empty() {
@@ -604,10 +605,12 @@ impl Reader<'_, '_> {
         })?;
         let nrm = all(["nx", "ny", "nz"])?;
         let mut uv = None;
+        // Mitsuba 3's order of preference (ply.cpp): u/v, texture_u/texture_v, s/t; then
+        // texture_s/texture_t, which Mitsuba does not read.
         for (a, b) in [
             ("u", "v"),
-            ("s", "t"),
             ("texture_u", "texture_v"),
+            ("s", "t"),
             ("texture_s", "texture_t"),
         ] {
             if let (Some(a), Some(b)) = (scalar(a)?, scalar(b)?) {
