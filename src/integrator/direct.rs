@@ -71,9 +71,14 @@ pub fn li(
             let ray2 = si.spawn_ray(frame.to_world(bs.wi));
             stats.rays += 1;
             if let Some(si2) = scene.intersect(&ray2) {
-                l += beta
-                    * bs.weight
-                    * emitted(scene, &si2, ray2.d, Some((si.p, bs.pdf)), p.shadow_rays);
+                // A delta sample (plastic's coating) cannot be found by light sampling: it
+                // takes the emission with weight 1.
+                let prev = if bs.specular {
+                    None
+                } else {
+                    Some((si.p, bs.pdf))
+                };
+                l += beta * bs.weight * emitted(scene, &si2, ray2.d, prev, p.shadow_rays);
             }
         }
         break;
