@@ -76,7 +76,8 @@ pub fn li(
         if let Some(bs) = material.sample(wo, u1, u2, TransportMode::Radiance) {
             let ray2 = si.spawn_ray(frame.to_world(bs.wi));
             stats.rays += 1;
-            // After a specular sample there is no light sample to weigh against.
+            // A delta sample (a mirror, plastic's coating) cannot be found by light sampling:
+            // it takes the emission with weight 1.
             let prev = (!bs.specular).then_some((si.p, bs.pdf));
             match scene.intersect(&ray2) {
                 Some(si2) => {

@@ -35,6 +35,23 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
     0.5 * (r_parl * r_parl + r_perp * r_perp)
 }
 
+/// Fresnel reflectance together with what refraction needs, as Mitsuba's `fresnel`:
+/// returns (F, cos θt, η_it, η_ti), where cos θt is signed (on the far side of the interface
+/// from `cos_i`), η_it is the relative index in the direction of travel and η_ti = 1/η_it.
+/// `eta` is inside over outside; a negative `cos_i` means the light arrives from inside.
+#[inline]
+pub fn fresnel_refraction(cos_i: f32, eta: f32) -> (f32, f32, f32, f32) {
+    let (eta_it, eta_ti) = if cos_i >= 0.0 {
+        (eta, 1.0 / eta)
+    } else {
+        (1.0 / eta, eta)
+    };
+    let cos_t2 = 1.0 - (1.0 - cos_i * cos_i) * eta_ti * eta_ti;
+    let cos_t = cos_t2.max(0.0).sqrt();
+    let f = fresnel_dielectric(cos_i, eta);
+    (f, if cos_i >= 0.0 { -cos_t } else { cos_t }, eta_it, eta_ti)
+}
+
 /// Refracts `wi` (pointing away from the surface) through the interface with local normal +z.
 /// Returns the transmitted direction and the relative index η_t/η_i actually crossed.
 #[inline]

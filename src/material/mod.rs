@@ -4,16 +4,30 @@
 //! work in the local shading frame: z is the shading normal, `wo` points towards the viewer
 //! (or the previous vertex) and `wi` towards the light; both are unit vectors.
 
+pub mod conductor;
 pub mod dielectric;
 pub mod lambert;
+pub mod microfacet;
 pub mod mirror;
 pub mod oren_nayar;
+pub mod plastic;
+pub mod rough_conductor;
+pub mod rough_dielectric;
+pub mod rough_plastic;
 pub mod sampling;
+pub mod thin_dielectric;
 
+pub use conductor::{conductor_ior, Conductor};
 pub use dielectric::Dielectric;
 pub use lambert::Lambert;
+pub use microfacet::Ggx;
 pub use mirror::Mirror;
 pub use oren_nayar::OrenNayar;
+pub use plastic::Plastic;
+pub use rough_conductor::RoughConductor;
+pub use rough_dielectric::RoughDielectric;
+pub use rough_plastic::RoughPlastic;
+pub use thin_dielectric::ThinDielectric;
 
 use crate::Color;
 use glam::{Vec2, Vec3A};
@@ -45,6 +59,13 @@ pub enum Bsdf {
     OrenNayar(OrenNayar),
     Mirror(Mirror),
     Dielectric(Dielectric),
+    Conductor(Conductor),
+    RoughConductor(RoughConductor),
+    RoughDielectric(RoughDielectric),
+    ThinDielectric(ThinDielectric),
+    /// A delta lobe plus a diffuse one: not all-delta (`is_specular` is false).
+    Plastic(Plastic),
+    RoughPlastic(RoughPlastic),
     /// Absorbs everything (the back of a light, a black body).
     Black,
 }
@@ -64,10 +85,23 @@ impl Material {
         Material { bsdf, two_sided }
     }
 
-    /// True when every scattering is a delta (mirror, glass): no light sampling there.
+    /// True when every scattering is a delta (mirror, glass, smooth metal, thin sheet): no
+    /// light sampling there. Plastic mixes a delta lobe with a diffuse one and is not.
     #[inline]
     pub fn is_specular(&self) -> bool {
-        matches!(self.bsdf, Bsdf::Mirror(_) | Bsdf::Dielectric(_))
+        matches!(
+            self.bsdf,
+            Bsdf::Mirror(_) | Bsdf::Dielectric(_) | Bsdf::Conductor(_) | Bsdf::ThinDielectric(_)
+        )
+    }
+
+    /// True for BSDFs that transmit as well as reflect (two-sided by nature).
+    #[inline]
+    fn is_transmissive(&self) -> bool {
+        matches!(
+            self.bsdf,
+            Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_) | Bsdf::ThinDielectric(_)
+        )
     }
 
     #[inline]
@@ -79,7 +113,7 @@ impl Material {
     /// hemisphere. Returns None when the one-sided surface is seen from behind.
     #[inline]
     fn orient(&self, wo: Vec3A) -> Option<f32> {
-        if matches!(self.bsdf, Bsdf::Dielectric(_)) {
+        if self.is_transmissive() {
             return Some(1.0);
         }
         if wo.z > 0.0 {
@@ -91,9 +125,19 @@ impl Material {
         }
     }
 
-    /// f(wo, wi), without the cosine. Zero for delta BSDFs.
+    /// f(wo, wi), without the cosine, for radiance transport (what the path tracer needs).
+    /// Zero for delta BSDFs; for plastic, only its non-delta part.
     #[inline]
     pub fn eval(&self, wo: Vec3A, wi: Vec3A) -> Color {
+        self.eval_mode(wo, wi, TransportMode::Radiance)
+    }
+
+    /// f(wo, wi) in either transport mode (only rough refraction tells them apart).
+    #[inline]
+    pub fn eval_mode(&self, wo: Vec3A, wi: Vec3A, mode: TransportMode) -> Color {
+        if let Bsdf::RoughDielectric(b) = &self.bsdf {
+            return b.eval(wo, wi, mode);
+        }
         let Some(s) = self.orient(wo) else {
             return Color::ZERO;
         };
@@ -102,6 +146,9 @@ impl Material {
         match &self.bsdf {
             Bsdf::Lambert(b) => b.eval(wo, wi),
             Bsdf::OrenNayar(b) => b.eval(wo, wi),
+            Bsdf::RoughConductor(b) => b.eval(wo, wi),
+            Bsdf::Plastic(b) => b.eval(wo, wi),
+            Bsdf::RoughPlastic(b) => b.eval(wo, wi),
             _ => Color::ZERO,
         }
     }
@@ -109,12 +156,18 @@ impl Material {
     /// Solid-angle pdf of sampling `wi` given `wo`. Zero for delta BSDFs.
     #[inline]
     pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
+        if let Bsdf::RoughDielectric(b) = &self.bsdf {
+            return b.pdf(wo, wi);
+        }
         let Some(s) = self.orient(wo) else { return 0.0 };
         let flip = Vec3A::new(1.0, 1.0, s);
         let (wo, wi) = (wo * flip, wi * flip);
         match &self.bsdf {
             Bsdf::Lambert(b) => b.pdf(wo, wi),
             Bsdf::OrenNayar(b) => b.pdf(wo, wi),
+            Bsdf::RoughConductor(b) => b.pdf(wo, wi),
+            Bsdf::Plastic(b) => b.pdf(wo, wi),
+            Bsdf::RoughPlastic(b) => b.pdf(wo, wi),
             _ => 0.0,
         }
     }
@@ -130,6 +183,12 @@ impl Material {
             Bsdf::OrenNayar(b) => b.sample(wo_f, u2),
             Bsdf::Mirror(b) => b.sample(wo_f),
             Bsdf::Dielectric(b) => return b.sample(wo, u1, mode),
+            Bsdf::Conductor(b) => b.sample(wo_f),
+            Bsdf::RoughConductor(b) => b.sample(wo_f, u2),
+            Bsdf::RoughDielectric(b) => return b.sample(wo, u1, u2, mode),
+            Bsdf::ThinDielectric(b) => return b.sample(wo, u1),
+            Bsdf::Plastic(b) => b.sample(wo_f, u1, u2),
+            Bsdf::RoughPlastic(b) => b.sample(wo_f, u1, u2),
             Bsdf::Black => None,
         }?;
         bs.wi *= flip;
@@ -143,7 +202,21 @@ impl Material {
             Bsdf::Lambert(b) => b.albedo,
             Bsdf::OrenNayar(b) => b.albedo,
             Bsdf::Mirror(b) => b.reflectance,
-            Bsdf::Dielectric(_) => Color::ONE,
+            Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_) | Bsdf::ThinDielectric(_) => Color::ONE,
+            Bsdf::Conductor(b) => b.reflectance(1.0),
+            Bsdf::RoughConductor(b) => {
+                b.specular_reflectance * conductor::fresnel_conductor_rgb(1.0, b.eta, b.k)
+            }
+            // The coating's specular reflectance at normal incidence plus the base seen
+            // through it.
+            Bsdf::Plastic(b) => {
+                let f0 = dielectric::fresnel_dielectric(1.0, b.eta);
+                b.specular_reflectance * f0 + b.diffuse_reflectance * (1.0 - f0)
+            }
+            Bsdf::RoughPlastic(b) => {
+                let f0 = dielectric::fresnel_dielectric(1.0, b.eta);
+                b.specular_reflectance * f0 + b.diffuse_reflectance * (1.0 - f0)
+            }
             Bsdf::Black => Color::ZERO,
         }
     }

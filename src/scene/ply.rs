@@ -30,7 +30,7 @@ pub struct PlyMesh {
 }
 
 impl PlyMesh {
-    /// The mesh as the renderer's [`TriangleMesh`] .
+    /// The mesh as the renderer's [`TriangleMesh`].
     pub fn into_triangle_mesh(self) -> TriangleMesh {
         TriangleMesh {
             normals: if self.normals.is_empty() {
