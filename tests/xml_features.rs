@@ -45,3 +45,8 @@ fn feature_matches_mitsuba(name: &str, spp: u32, ref_spp: u32) {
 fn point_directional_and_constant_emitters() {
     feature_matches_mitsuba("lights", 256, 4096);
 }
+
+#[test]
+fn conductor_rough_and_thin_dielectric_and_plastic_bsdfs() {
+    feature_matches_mitsuba("materials", 512, 4096);
+}

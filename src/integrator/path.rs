@@ -42,7 +42,7 @@ pub fn li(
         if depth + 1 >= max_depth {
             break;
         }
-        let material = &scene.materials[si.material as usize];
+        let material = &scene.material_at(&si);
         if material.is_black() {
             break;
         }

@@ -78,11 +78,50 @@ pub struct Material {
     /// geometric normal (Mitsuba's convention); two-sided ones reflect alike on both sides
     /// (pbrt's). Dielectrics have two sides by nature and ignore this.
     pub two_sided: bool,
+    /// A texture (index into the scene's) giving the BSDF's main colour per hit: diffuse
+    /// reflectance, or a metal's specular reflectance.
+    pub texture: Option<u32>,
 }
 
 impl Material {
     pub fn new(bsdf: Bsdf, two_sided: bool) -> Self {
-        Material { bsdf, two_sided }
+        Material {
+            bsdf,
+            two_sided,
+            texture: None,
+        }
+    }
+
+    /// Whether the BSDF has a main colour a texture can give.
+    pub fn takes_texture(&self) -> bool {
+        matches!(
+            self.bsdf,
+            Bsdf::Lambert(_)
+                | Bsdf::OrenNayar(_)
+                | Bsdf::Mirror(_)
+                | Bsdf::Conductor(_)
+                | Bsdf::RoughConductor(_)
+                | Bsdf::Plastic(_)
+                | Bsdf::RoughPlastic(_)
+        )
+    }
+
+    /// This material with its main colour set to `c` (a texture's value at a hit). Derived
+    /// quantities such as plastic's lobe-selection weight keep the values they were built
+    /// with, from the texture's mean, as in Mitsuba.
+    #[inline]
+    pub fn with_color(mut self, c: Color) -> Material {
+        match &mut self.bsdf {
+            Bsdf::Lambert(b) => b.albedo = c,
+            Bsdf::OrenNayar(b) => b.albedo = c,
+            Bsdf::Mirror(b) => b.reflectance = c,
+            Bsdf::Conductor(b) => b.specular_reflectance = c,
+            Bsdf::RoughConductor(b) => b.specular_reflectance = c,
+            Bsdf::Plastic(b) => b.diffuse_reflectance = c,
+            Bsdf::RoughPlastic(b) => b.diffuse_reflectance = c,
+            _ => {}
+        }
+        self
     }
 
     /// True when every scattering is a delta (mirror, glass, smooth metal, thin sheet): no

@@ -121,6 +121,7 @@ impl Scene {
             lights: Lights::with_others(lights, others, radius),
             normals,
             uvs,
+            textures: desc.textures,
             cameras: desc.cameras,
             desc_settings: desc.settings,
         }

@@ -65,6 +65,8 @@ pub struct SceneDesc {
     pub materials: Vec<Material>,
     pub shapes: Vec<ShapeDesc>,
     pub lights: Vec<LightDesc>,
+    /// Textures that materials refer to by index.
+    pub textures: Vec<crate::texture::Texture>,
     /// Things the loader accepted but rendered differently, one line each with file:line:col.
     pub warnings: Vec<String>,
 }

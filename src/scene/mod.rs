@@ -87,6 +87,7 @@ pub struct Scene {
     /// triangle's face normal, and barycentric uvs, stand in for what it lacks).
     pub normals: Vec<[Vec3A; 3]>,
     pub uvs: Vec<[Vec2; 3]>,
+    pub textures: Vec<crate::texture::Texture>,
     pub cameras: Vec<(String, CameraDesc)>,
     pub desc_settings: desc::FileSettings,
 }
@@ -188,6 +189,16 @@ impl Scene {
                 Shape::Triangle(tri, _) => tri.intersect(ray, t_max).is_some(),
                 Shape::Sphere(s) => s.intersect(ray, t_max).is_some(),
             })
+    }
+
+    /// The material at a hit, its texture (if any) evaluated there.
+    #[inline]
+    pub fn material_at(&self, si: &Interaction) -> Material {
+        let m = self.materials[si.material as usize];
+        match m.texture {
+            None => m,
+            Some(t) => m.with_color(self.textures[t as usize].eval(si.uv)),
+        }
     }
 
     pub fn camera(&self, name: Option<&str>) -> Option<&CameraDesc> {

@@ -6,7 +6,13 @@ use super::props::{ColorSrc, Ids, Props, Result};
 use crate::camera::{CameraDesc, FovAxis};
 use crate::geometry::mesh::TriangleMesh;
 use crate::integrator::IntegratorKind;
-use crate::material::{Bsdf, Dielectric, Lambert, Material, Mirror};
+use crate::material::conductor::{conductor_ior, conductor_names};
+use crate::material::{
+    Bsdf, Conductor, Dielectric, Lambert, Material, Mirror, Plastic, RoughConductor,
+    RoughDielectric, RoughPlastic, ThinDielectric,
+};
+use crate::texture::{Bitmap, BitmapTexture, FilterType, Texture, UvTransform, WrapMode};
+use std::sync::Arc;
 use crate::scene::desc::{GeometryDesc, LightDesc, SceneDesc, ShapeDesc};
 use crate::scene::obj::load_obj;
 use crate::scene::ply::load_ply;
@@ -26,6 +32,7 @@ struct Builder<'a> {
     desc: SceneDesc,
     /// Material index of each BSDF element already converted (shared through `<ref>`).
     materials: HashMap<*const Elem, u32>,
+    textures: HashMap<*const Elem, u32>,
     default_material: Option<u32>,
 }
 
@@ -36,6 +43,7 @@ pub fn build(doc: &Document, lenient: bool) -> Result<SceneDesc> {
         lenient,
         desc: SceneDesc::default(),
         materials: HashMap::new(),
+        textures: HashMap::new(),
         default_material: None,
     };
     let scene = Props::new(doc, &b.ids, &doc.root)?;
@@ -334,16 +342,138 @@ impl<'a> Builder<'a> {
         })
     }
 
-    fn reflectance(&mut self, p: &Props<'a>, name: &'static str, default: f32) -> Result<Color> {
+    /// A colour parameter that may be a texture: the constant (or the texture's mean, for
+    /// what a BSDF derives from it) and the texture's index.
+    fn color_param(
+        &mut self,
+        p: &Props<'a>,
+        name: &'static str,
+        default: f32,
+    ) -> Result<(Color, Option<u32>)> {
         match p.color_src(name, Color::splat(default))? {
-            ColorSrc::Const(c) => Ok(c),
-            ColorSrc::Texture(t) => Err(self.doc.err(t, "textures are not supported yet")),
+            ColorSrc::Const(c) => Ok((c, None)),
+            ColorSrc::Texture(t) => {
+                let i = self.texture(t)?;
+                Ok((self.desc.textures[i as usize].mean(), Some(i)))
+            }
         }
+    }
+
+    /// The index of a texture element (converted once, shared by reference).
+    fn texture(&mut self, e: &'a Elem) -> Result<u32> {
+        if let Some(&i) = self.textures.get(&(e as *const Elem)) {
+            return Ok(i);
+        }
+        let p = self.props(e)?;
+        let kind = p.kind()?;
+        let to_uv = UvTransform::from_mat4(p.transform("to_uv")?);
+        let tex = match kind {
+            "bitmap" => {
+                let name = p
+                    .string_opt("filename")?
+                    .ok_or_else(|| self.doc.err(e, "a bitmap texture needs a 'filename'"))?;
+                let raw = p.bool("raw", false)?;
+                let path = self.path_of(e, name);
+                let bitmap = Bitmap::load(&path, raw).map_err(|mut err| {
+                    // Name the texture element too: the image file itself has no line.
+                    err.message = format!(
+                        "{} (texture at {}:{}:{})",
+                        err.message,
+                        self.doc.files[e.file].display(),
+                        e.pos.0,
+                        e.pos.1
+                    );
+                    err
+                })?;
+                let mut b = BitmapTexture::new(Arc::new(bitmap));
+                let f = p.string("filter_type", "bilinear")?;
+                b.filter = FilterType::parse(f).ok_or_else(|| {
+                    self.doc.err(e, format!("filter_type '{f}': expected bilinear or nearest"))
+                })?;
+                let w = p.string("wrap_mode", "repeat")?;
+                b.wrap = WrapMode::parse(w).ok_or_else(|| {
+                    self.doc.err(e, format!("wrap_mode '{w}': expected repeat, mirror or clamp"))
+                })?;
+                b.to_uv = to_uv;
+                p.ignore("format");
+                Texture::Bitmap(b)
+            }
+            "checkerboard" => Texture::Checkerboard {
+                color0: p.color("color0", Color::splat(0.4))?,
+                color1: p.color("color1", Color::splat(0.2))?,
+                to_uv,
+            },
+            _ => {
+                return Err(self.doc.err_attr(
+                    e,
+                    "type",
+                    format!("texture '{kind}' is not supported; mcrt has bitmap and checkerboard"),
+                ))
+            }
+        };
+        p.finish()?;
+        self.desc.textures.push(tex);
+        let i = (self.desc.textures.len() - 1) as u32;
+        self.textures.insert(e as *const Elem, i);
+        Ok(i)
+    }
+
+    /// Microfacet roughness: `alpha`, or `alpha_u` and `alpha_v`; GGX only.
+    fn roughness(&mut self, p: &Props<'a>) -> Result<(f32, f32)> {
+        let e = p.owner;
+        let d = p.string_opt("distribution")?;
+        match d {
+            Some("ggx") => {}
+            Some("beckmann") | None => {
+                let msg = "the Beckmann distribution (Mitsuba's default) is not supported: add \
+                           <string name=\"distribution\" value=\"ggx\"/>";
+                if !self.lenient {
+                    return Err(self.doc.err(e, msg));
+                }
+                self.warn(e, "Beckmann roughness rendered as GGX of the same alpha (--lenient)");
+            }
+            Some(other) => {
+                return Err(self.doc.err(e, format!("distribution '{other}': expected ggx")))
+            }
+        }
+        p.ignore("sample_visible");
+        let a = p.float("alpha", 0.1)?;
+        let au = p.float("alpha_u", a)?;
+        let av = p.float("alpha_v", a)?;
+        for (n, v) in [("alpha", a), ("alpha_u", au), ("alpha_v", av)] {
+            if !(v > 0.0) {
+                return Err(self.doc.err(e, format!("{n} must be positive, got {v}")));
+            }
+        }
+        Ok((au, av))
+    }
+
+    /// A conductor's complex index of refraction: a named `material`, or `eta` and `k`.
+    fn conductor_ior(&mut self, p: &Props<'a>) -> Result<(Color, Color)> {
+        let e = p.owner;
+        let named = p.string_opt("material")?;
+        if p.has("eta") || p.has("k") {
+            if named.is_some() {
+                return Err(self.doc.err(e, "give either 'material' or 'eta' and 'k', not both"));
+            }
+            return Ok((p.color("eta", Color::ZERO)?, p.color("k", Color::ONE)?));
+        }
+        let name = named.unwrap_or("none");
+        conductor_ior(name).ok_or_else(|| {
+            self.doc.err(
+                e,
+                format!(
+                    "unknown conductor material '{name}'; expected none or one of {}",
+                    conductor_names().collect::<Vec<_>>().join(", ")
+                ),
+            )
+        })
     }
 
     fn bsdf(&mut self, e: &'a Elem, two_sided: bool) -> Result<Material> {
         let p = self.props(e)?;
         let kind = p.kind()?;
+        let mut texture = None;
         let bsdf = match kind {
             "twosided" => {
                 let inner: Vec<&Elem> = p
@@ -362,32 +492,60 @@ impl<'a> Builder<'a> {
                 p.finish()?;
                 return self.bsdf(inner[0], true);
             }
-            "diffuse" => Bsdf::Lambert(Lambert {
-                albedo: self.reflectance(&p, "reflectance", 0.5)?,
-            }),
-            "dielectric" => {
-                let int = ior(&p, "int_ior", 1.5046)?;
-                let ext = ior(&p, "ext_ior", 1.000277)?;
+            "diffuse" => {
+                let (c, t) = self.color_param(&p, "reflectance", 0.5)?;
+                texture = t;
+                Bsdf::Lambert(Lambert { albedo: c })
+            }
+            "dielectric" | "thindielectric" | "roughdielectric" => {
+                let eta = ior(&p, "int_ior", 1.5046)? / ior(&p, "ext_ior", 1.000277)?;
                 for name in ["specular_reflectance", "specular_transmittance"] {
                     if p.color(name, Color::ONE)? != Color::ONE {
                         return Err(self.doc.err(
                             e,
-                            format!("dielectric {name} other than 1 is not supported"),
+                            format!("{kind} {name} other than 1 is not supported"),
                         ));
                     }
                 }
-                Bsdf::Dielectric(Dielectric { eta: int / ext })
-            }
-            "conductor" => {
-                let material = p.string("material", "none")?;
-                let r = p.color("specular_reflectance", Color::ONE)?;
-                if material != "none" || p.has("eta") || p.has("k") {
-                    return Err(self.doc.err(
-                        e,
-                        "conductor materials other than 'none' are not supported yet",
-                    ));
+                match kind {
+                    "dielectric" => Bsdf::Dielectric(Dielectric { eta }),
+                    "thindielectric" => Bsdf::ThinDielectric(ThinDielectric::new(eta)),
+                    _ => {
+                        let (au, av) = self.roughness(&p)?;
+                        Bsdf::RoughDielectric(RoughDielectric::new(au, av, eta))
+                    }
                 }
-                Bsdf::Mirror(Mirror { reflectance: r })
+            }
+            "conductor" | "roughconductor" => {
+                let (eta, k) = self.conductor_ior(&p)?;
+                let (r, t) = self.color_param(&p, "specular_reflectance", 1.0)?;
+                texture = t;
+                if kind == "conductor" {
+                    if p.string_opt("material")? == Some("none") || (eta == Color::ZERO && k == Color::ONE) {
+                        Bsdf::Mirror(Mirror { reflectance: r })
+                    } else {
+                        Bsdf::Conductor(Conductor::new(eta, k, r))
+                    }
+                } else {
+                    let (au, av) = self.roughness(&p)?;
+                    Bsdf::RoughConductor(RoughConductor::new(au, av, eta, k, r))
+                }
+            }
+            "plastic" | "roughplastic" => {
+                let eta = ior(&p, "int_ior", 1.49)? / ior(&p, "ext_ior", 1.000277)?;
+                let (d, t) = self.color_param(&p, "diffuse_reflectance", 0.5)?;
+                texture = t;
+                let s = p.color("specular_reflectance", Color::ONE)?;
+                let nonlinear = p.bool("nonlinear", false)?;
+                if kind == "plastic" {
+                    Bsdf::Plastic(Plastic::new(eta, d, s, nonlinear))
+                } else {
+                    let (au, av) = self.roughness(&p)?;
+                    if au != av {
+                        return Err(self.doc.err(e, "roughplastic is isotropic: give 'alpha'"));
+                    }
+                    Bsdf::RoughPlastic(RoughPlastic::new(au, eta, d, s, nonlinear))
+                }
             }
             _ => {
                 if self.lenient {
@@ -414,7 +572,9 @@ impl<'a> Builder<'a> {
             }
         };
         p.finish()?;
-        Ok(Material::new(bsdf, two_sided))
+        let mut m = Material::new(bsdf, two_sided);
+        m.texture = texture;
+        Ok(m)
     }
 
     fn shape(&mut self, e: &'a Elem) -> Result<()> {
