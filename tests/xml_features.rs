@@ -50,3 +50,8 @@ fn point_directional_and_constant_emitters() {
 fn conductor_rough_and_thin_dielectric_and_plastic_bsdfs() {
     feature_matches_mitsuba("materials", 512, 4096);
 }
+
+#[test]
+fn textures_meshes_and_includes() {
+    feature_matches_mitsuba("textures", 256, 4096);
+}

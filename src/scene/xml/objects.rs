@@ -11,15 +11,15 @@ use crate::material::{
     Bsdf, Conductor, Dielectric, Lambert, Material, Mirror, Plastic, RoughConductor,
     RoughDielectric, RoughPlastic, ThinDielectric,
 };
-use crate::texture::{Bitmap, BitmapTexture, FilterType, Texture, UvTransform, WrapMode};
-use std::sync::Arc;
 use crate::scene::desc::{GeometryDesc, LightDesc, SceneDesc, ShapeDesc};
 use crate::scene::obj::load_obj;
 use crate::scene::ply::load_ply;
+use crate::texture::{Bitmap, BitmapTexture, FilterType, Texture, UvTransform, WrapMode};
 use crate::Color;
 use glam::{Mat4, Vec2, Vec3};
 use std::collections::HashMap;
 use std::path::PathBuf;
+use std::sync::Arc;
 
 /// Segments of the polygon that stands for a `disk` (its radius is enlarged so that the area,
 /// and so an emitter's power, is exact).
@@ -388,11 +388,17 @@ impl<'a> Builder<'a> {
                 let mut b = BitmapTexture::new(Arc::new(bitmap));
                 let f = p.string("filter_type", "bilinear")?;
                 b.filter = FilterType::parse(f).ok_or_else(|| {
-                    self.doc.err(e, format!("filter_type '{f}': expected bilinear or nearest"))
+                    self.doc.err(
+                        e,
+                        format!("filter_type '{f}': expected bilinear or nearest"),
+                    )
                 })?;
                 let w = p.string("wrap_mode", "repeat")?;
                 b.wrap = WrapMode::parse(w).ok_or_else(|| {
-                    self.doc.err(e, format!("wrap_mode '{w}': expected repeat, mirror or clamp"))
+                    self.doc.err(
+                        e,
+                        format!("wrap_mode '{w}': expected repeat, mirror or clamp"),
+                    )
                 })?;
                 b.to_uv = to_uv;
                 p.ignore("format");
@@ -430,10 +436,15 @@ impl<'a> Builder<'a> {
                 if !self.lenient {
                     return Err(self.doc.err(e, msg));
                 }
-                self.warn(e, "Beckmann roughness rendered as GGX of the same alpha (--lenient)");
+                self.warn(
+                    e,
+                    "Beckmann roughness rendered as GGX of the same alpha (--lenient)",
+                );
             }
             Some(other) => {
-                return Err(self.doc.err(e, format!("distribution '{other}': expected ggx")))
+                return Err(self
+                    .doc
+                    .err(e, format!("distribution '{other}': expected ggx")))
             }
         }
         p.ignore("sample_visible");
@@ -454,7 +465,9 @@ impl<'a> Builder<'a> {
         let named = p.string_opt("material")?;
         if p.has("eta") || p.has("k") {
             if named.is_some() {
-                return Err(self.doc.err(e, "give either 'material' or 'eta' and 'k', not both"));
+                return Err(self
+                    .doc
+                    .err(e, "give either 'material' or 'eta' and 'k', not both"));
             }
             return Ok((p.color("eta", Color::ZERO)?, p.color("k", Color::ONE)?));
         }
@@ -501,10 +514,9 @@ impl<'a> Builder<'a> {
                 let eta = ior(&p, "int_ior", 1.5046)? / ior(&p, "ext_ior", 1.000277)?;
                 for name in ["specular_reflectance", "specular_transmittance"] {
                     if p.color(name, Color::ONE)? != Color::ONE {
-                        return Err(self.doc.err(
-                            e,
-                            format!("{kind} {name} other than 1 is not supported"),
-                        ));
+                        return Err(self
+                            .doc
+                            .err(e, format!("{kind} {name} other than 1 is not supported")));
                     }
                 }
                 match kind {
@@ -521,7 +533,9 @@ impl<'a> Builder<'a> {
                 let (r, t) = self.color_param(&p, "specular_reflectance", 1.0)?;
                 texture = t;
                 if kind == "conductor" {
-                    if p.string_opt("material")? == Some("none") || (eta == Color::ZERO && k == Color::ONE) {
+                    if p.string_opt("material")? == Some("none")
+                        || (eta == Color::ZERO && k == Color::ONE)
+                    {
                         Bsdf::Mirror(Mirror { reflectance: r })
                     } else {
                         Bsdf::Conductor(Conductor::new(eta, k, r))
