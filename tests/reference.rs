@@ -279,7 +279,8 @@ fn tncg15_full_resolution(spp: u32) -> (BlockComparison, Vec<bool>, f64) {
 /// The bar at 1024 spp: every block within noise. At 1024 spp the measured noise of a
 /// 16×16 block here is about 1 % (the same as Mitsuba's: its reference's 0.1–0.3 % at 16384
 /// spp is 0.4–1.2 % at 1024), so 2 % is a 2σ criterion that a few of the 200 non-caustic
-/// blocks miss by chance; the test prints them. About a minute on two cores:
+/// blocks miss by chance (Mitsuba 3's own 1024-spp render misses it on six, see
+/// `other_renderer_against_the_2_percent_bar`); the test prints them. About a minute on two cores:
 /// `cargo test --release --test reference -- --ignored`.
 #[test]
 #[ignore]
@@ -311,4 +312,41 @@ fn caustic_mask_is_where_the_caustic_is() {
     // Floor point below the glass sphere, on the side away from the light: (6, 2.5, −5),
     // projected through eye 1 onto x = 0: (y, z) = (2.5/7, −5/7) → block (5, 13).
     assert!(mask[13 * 16 + 5], "block (5, 13) holds the caustic");
+}
+
+/// The 2 % bar applied to another renderer's image of eye 1 (256×256), given by the path in
+/// `MCRT_OTHER_EXR`: how many blocks outside the caustic are off by more than 2 %. Mitsuba 3
+/// itself at 1024 spp (`python3 tools/mitsuba_ref.py tests/data/mitsuba/hexroom/hexroom.xml
+/// mi.exr 1024 --seed 1000`) has six such blocks, worst 2.9 %: at 1024 spp the bar is a
+/// 2σ criterion for any unbiased path tracer. Run with
+/// `MCRT_OTHER_EXR=mi.exr cargo test --release --test reference -- --ignored other_renderer`.
+#[test]
+#[ignore]
+fn other_renderer_against_the_2_percent_bar() {
+    let Ok(path) = std::env::var("MCRT_OTHER_EXR") else {
+        panic!("set MCRT_OTHER_EXR to a 256×256 EXR of eye 1");
+    };
+    let (scene, _) = load("scenes/tncg15.toml");
+    let mask = caustic_blocks(&scene, 256, 16);
+    let other = mcrt::image::read_exr(std::path::Path::new(&path)).expect("readable EXR");
+    let r = reference("hexroom-eye1.exr");
+    assert_eq!((other.width, other.height), (256, 256));
+    let (mut worst, mut over) = (0.0f64, 0);
+    for by in 0..16 {
+        for bx in 0..16 {
+            let (a, b) = (other.block_mean(bx, by, 16), r.block_mean(bx, by, 16));
+            let e = ((a[0] + a[1] + a[2]) / (b[0] + b[1] + b[2]) - 1.0).abs();
+            if !mask[(by * 16 + bx) as usize] {
+                worst = worst.max(e);
+                if e > 0.02 {
+                    over += 1;
+                    eprintln!("block ({bx}, {by}): {:.2} %", 100.0 * e);
+                }
+            }
+        }
+    }
+    eprintln!(
+        "outside the caustic: worst {:.2} %, {over} blocks over 2 %",
+        100.0 * worst
+    );
 }
