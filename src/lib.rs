@@ -104,6 +104,39 @@ pub fn load_scene_with(path: &Path, opts: &LoadOptions) -> Result<SceneDesc, Err
     }
 }
 
+/// Bytes of memory a render needs beyond the scene: the film (f64 sums, sums of squares
+/// and counts: 56 bytes a pixel) and the image written from it (12 bytes a pixel).
+pub fn render_memory(s: &RenderSettings) -> u64 {
+    let (_, _, w, h) = s.window();
+    w as u64 * h as u64 * (56 + 12)
+}
+
+/// Memory the system can still give, from /proc/meminfo (None where that is unknown).
+pub fn available_memory() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+/// Refuses a render whose film would not fit in memory, before anything is allocated.
+pub fn check_memory(s: &RenderSettings) -> Result<(), Error> {
+    let need = render_memory(s);
+    if let Some(have) = available_memory() {
+        if need > have {
+            let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
+            let (_, _, w, h) = s.window();
+            return Err(Error::Usage(format!(
+                "a {w} × {h} image needs {:.1} GiB for its film, but only {:.1} GiB of memory \
+                 is available; render a smaller image (--width, --height) or a crop",
+                gib(need),
+                gib(have)
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// Default image size and sample count when neither the scene nor a flag gives one.
 pub const DEFAULT_SIZE: u32 = 512;
 pub const DEFAULT_SPP: u32 = 16;

@@ -179,6 +179,11 @@ fn render(a: RenderArgs) -> Result<(), Error> {
         file_settings.max_depth = None;
     }
     let settings = mcrt::resolve_settings(&file_settings, &over, a.threads)?;
+    mcrt::check_memory(&settings).map_err(|e| match (a.width, a.height) {
+        // The size came from the scene file: say so.
+        (None, None) => Error::Scene(SceneError::new(&a.scene, None, e.to_string())),
+        _ => e,
+    })?;
     // The camera must exist before anything is built or rendered.
     let names: Vec<&str> = desc.cameras.iter().map(|(n, _)| n.as_str()).collect();
     if names.is_empty() {

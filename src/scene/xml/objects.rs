@@ -374,6 +374,15 @@ impl<'a> Builder<'a> {
                     .ok_or_else(|| self.doc.err(e, "a bitmap texture needs a 'filename'"))?;
                 let raw = p.bool("raw", false)?;
                 let path = self.path_of(e, name);
+                if !path.is_file() {
+                    return Err(self.doc.err(
+                        e,
+                        format!(
+                            "texture file '{name}' not found (looked for {})",
+                            path.display()
+                        ),
+                    ));
+                }
                 let bitmap = Bitmap::load(&path, raw).map_err(|mut err| {
                     // Name the texture element too: the image file itself has no line.
                     err.message = format!(
@@ -644,6 +653,15 @@ impl<'a> Builder<'a> {
                         .err(e, format!("a {kind} shape needs a 'filename'"))
                 })?;
                 let path = self.path_of(e, name);
+                if !path.is_file() {
+                    return Err(self.doc.err(
+                        e,
+                        format!(
+                            "mesh file '{name}' not found (looked for {})",
+                            path.display()
+                        ),
+                    ));
+                }
                 let mut mesh = if kind == "obj" {
                     let mut m = load_obj(&path)?;
                     if p.bool("flip_tex_coords", true)? {
@@ -709,6 +727,19 @@ impl<'a> Builder<'a> {
                         .doc
                         .err(obj, format!("<{tag}> cannot be nested in a <shape>")))
                 }
+            }
+        }
+        if let (Some(_), GeometryDesc::Mesh(m)) = (&emission, &geometry) {
+            let area: f32 = m
+                .indices
+                .iter()
+                .map(|t| {
+                    let [a, b, c] = t.map(|i| m.positions[i as usize]);
+                    0.5 * (b - a).cross(c - a).length()
+                })
+                .sum();
+            if !(area > 0.0 && area.is_finite()) {
+                return Err(self.doc.err(e, "an area emitter's shape must have a positive, finite area (this one is degenerate)"));
             }
         }
         let material = match material {

@@ -308,6 +308,13 @@ impl<'a> Props<'a> {
             "rgb" | "spectrum" => {
                 let v = self.value(e)?;
                 let n = numbers(v).filter(|n| n.iter().all(|x| x.is_finite()));
+                if n.as_ref().is_some_and(|n| n.iter().any(|x| *x < 0.0)) {
+                    return Err(self.doc.err_attr(
+                        e,
+                        "value",
+                        format!("'{name}': colour values must not be negative, found '{v}'"),
+                    ));
+                }
                 match n.as_deref() {
                     Some([g]) => Ok(ColorSrc::Const(Color::splat(*g))),
                     Some([r, g, b]) if e.tag == "rgb" => {

@@ -1,0 +1,221 @@
+//! The corpus of bad inputs (tests/bad-inputs/): scene files in mcrt's TOML format and in
+//! Mitsuba XML, and OBJ and PLY meshes, each wrong in one way. Every one must make `mcrt
+//! render` exit with status 2 and a message that names the file and says what is wrong (the
+//! fragment after `expect:` in the file's first lines), without a panic and without writing
+//! an output file. Meshes are rendered through a small scene that loads them (TOML for OBJ,
+//! Mitsuba XML for PLY).
+
+mod common;
+
+use common::cli::*;
+use std::path::{Path, PathBuf};
+
+fn corpus() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bad-inputs")
+}
+
+/// The text after `expect:` in the first lines of a file.
+fn expectation(path: &Path) -> String {
+    let bytes = std::fs::read(path).unwrap();
+    let text = String::from_utf8_lossy(&bytes[..bytes.len().min(400)]).into_owned();
+    let at = text
+        .find("expect:")
+        .unwrap_or_else(|| panic!("{} has no expect: line", path.display()));
+    let rest = &text[at + "expect:".len()..];
+    let end = rest.find(['\n', '\r']).unwrap_or(rest.len());
+    rest[..end]
+        .trim()
+        .trim_end_matches("-->")
+        .trim()
+        .to_string()
+}
+
+fn check(name: &str) {
+    let input = corpus().join(name);
+    let expect = expectation(&input);
+    let dir = TempDir::new("bad");
+    let scene = match input.extension().and_then(|e| e.to_str()) {
+        Some("ply") => dir.write(
+            "scene.xml",
+            &format!(
+                "<scene version=\"3.0.0\">\n<sensor type=\"perspective\"><float name=\"fov\" \
+                 value=\"40\"/></sensor>\n<shape type=\"ply\"><string name=\"filename\" \
+                 value=\"{}\"/></shape>\n</scene>\n",
+                input.display()
+            ),
+        ),
+        Some("obj") => dir.write(
+            "scene.toml",
+            &format!(
+                "[[camera]]\nname = \"c\"\ntype = \"perspective\"\norigin = [0, 0, 5]\n\
+                 target = [0, 0, 0]\nup = [0, 1, 0]\nfov = 40\n\n[material.m]\n\
+                 type = \"lambert\"\nalbedo = 0.5\n\n[[shape]]\ntype = \"mesh\"\n\
+                 file = {:?}\nmaterial = \"m\"\n",
+                input.display().to_string()
+            ),
+        ),
+        _ => input.clone(),
+    };
+    let out = dir.path().join("out.png");
+    let o = run(&[
+        "render".as_ref(),
+        scene.as_os_str(),
+        "-o".as_ref(),
+        out.as_os_str(),
+    ]);
+    let err = stderr_of(&o);
+    assert!(!err.contains("panicked"), "{name}: mcrt panicked:\n{err}");
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{name}: exit status; stderr:\n{err}"
+    );
+    assert!(
+        err.contains(name),
+        "{name}: the message should name the file:\n{err}"
+    );
+    assert!(
+        err.contains(&expect),
+        "{name}: the message should say {expect:?}:\n{err}"
+    );
+    assert!(!out.exists(), "{name}: an output file was written");
+    assert!(
+        o.stdout.is_empty(),
+        "{name}: nothing goes to stdout on failure"
+    );
+}
+
+macro_rules! bad_input {
+    ($test:ident, $file:expr) => {
+        #[test]
+        fn $test() {
+            check($file);
+        }
+    };
+}
+
+bad_input!(obj_bad_number_obj, "obj-bad-number.obj");
+bad_input!(obj_face_two_vertices_obj, "obj-face-two-vertices.obj");
+bad_input!(obj_index_out_of_range_obj, "obj-index-out-of-range.obj");
+bad_input!(obj_nan_vertex_obj, "obj-nan-vertex.obj");
+bad_input!(obj_vertex_two_numbers_obj, "obj-vertex-two-numbers.obj");
+bad_input!(ply_bad_magic_ply, "ply-bad-magic.ply");
+bad_input!(
+    ply_count_beyond_file_size_ply,
+    "ply-count-beyond-file-size.ply"
+);
+bad_input!(ply_huge_vertex_count_ply, "ply-huge-vertex-count.ply");
+bad_input!(ply_index_out_of_range_ply, "ply-index-out-of-range.ply");
+bad_input!(ply_nan_vertex_ply, "ply-nan-vertex.ply");
+bad_input!(ply_truncated_binary_ply, "ply-truncated-binary.ply");
+bad_input!(ply_unknown_format_ply, "ply-unknown-format.ply");
+bad_input!(toml_absurd_resolution_toml, "toml-absurd-resolution.toml");
+bad_input!(toml_albedo_above_one_toml, "toml-albedo-above-one.toml");
+bad_input!(
+    toml_camera_eye_on_target_toml,
+    "toml-camera-eye-on-target.toml"
+);
+bad_input!(toml_fov_zero_toml, "toml-fov-zero.toml");
+bad_input!(toml_infinite_emission_toml, "toml-infinite-emission.toml");
+bad_input!(
+    toml_max_depth_minus_two_toml,
+    "toml-max-depth-minus-two.toml"
+);
+bad_input!(
+    toml_mesh_index_out_of_range_toml,
+    "toml-mesh-index-out-of-range.toml"
+);
+bad_input!(toml_missing_mesh_file_toml, "toml-missing-mesh-file.toml");
+bad_input!(toml_nan_albedo_toml, "toml-nan-albedo.toml");
+bad_input!(toml_negative_ior_toml, "toml-negative-ior.toml");
+bad_input!(toml_negative_radius_toml, "toml-negative-radius.toml");
+bad_input!(toml_negative_width_toml, "toml-negative-width.toml");
+bad_input!(
+    toml_pinhole_missing_corner_toml,
+    "toml-pinhole-missing-corner.toml"
+);
+bad_input!(
+    toml_rr_survival_above_one_toml,
+    "toml-rr-survival-above-one.toml"
+);
+bad_input!(toml_spp_too_large_toml, "toml-spp-too-large.toml");
+bad_input!(
+    toml_syntax_unclosed_table_toml,
+    "toml-syntax-unclosed-table.toml"
+);
+bad_input!(
+    toml_triangle_two_vertices_toml,
+    "toml-triangle-two-vertices.toml"
+);
+bad_input!(
+    toml_unknown_camera_type_toml,
+    "toml-unknown-camera-type.toml"
+);
+bad_input!(toml_unknown_integrator_toml, "toml-unknown-integrator.toml");
+bad_input!(
+    toml_unknown_material_reference_toml,
+    "toml-unknown-material-reference.toml"
+);
+bad_input!(
+    toml_unknown_material_type_toml,
+    "toml-unknown-material-type.toml"
+);
+bad_input!(
+    toml_unknown_render_camera_toml,
+    "toml-unknown-render-camera.toml"
+);
+bad_input!(toml_unknown_render_key_toml, "toml-unknown-render-key.toml");
+bad_input!(toml_unknown_table_toml, "toml-unknown-table.toml");
+bad_input!(toml_width_is_a_string_toml, "toml-width-is-a-string.toml");
+bad_input!(toml_zero_area_light_toml, "toml-zero-area-light.toml");
+bad_input!(toml_zero_spp_toml, "toml-zero-spp.toml");
+bad_input!(xml_absurd_resolution_xml, "xml-absurd-resolution.xml");
+bad_input!(xml_beckmann_default_xml, "xml-beckmann-default.xml");
+bad_input!(xml_crop_outside_film_xml, "xml-crop-outside-film.xml");
+bad_input!(xml_duplicate_id_xml, "xml-duplicate-id.xml");
+bad_input!(xml_include_cycle_xml, "xml-include-cycle.xml");
+bad_input!(xml_malformed_xml, "xml-malformed.xml");
+bad_input!(xml_missing_include_xml, "xml-missing-include.xml");
+bad_input!(xml_missing_obj_file_xml, "xml-missing-obj-file.xml");
+bad_input!(xml_missing_reference_xml, "xml-missing-reference.xml");
+bad_input!(xml_misspelt_property_xml, "xml-misspelt-property.xml");
+bad_input!(xml_nan_radius_xml, "xml-nan-radius.xml");
+bad_input!(xml_negative_colour_xml, "xml-negative-colour.xml");
+bad_input!(xml_negative_radius_xml, "xml-negative-radius.xml");
+bad_input!(xml_rgb_two_numbers_xml, "xml-rgb-two-numbers.xml");
+bad_input!(xml_root_not_scene_xml, "xml-root-not-scene.xml");
+bad_input!(xml_rotate_without_angle_xml, "xml-rotate-without-angle.xml");
+bad_input!(
+    xml_spectrum_by_wavelength_xml,
+    "xml-spectrum-by-wavelength.xml"
+);
+bad_input!(
+    xml_sphere_nonuniform_scale_xml,
+    "xml-sphere-nonuniform-scale.xml"
+);
+bad_input!(xml_text_content_xml, "xml-text-content.xml");
+bad_input!(xml_undefined_parameter_xml, "xml-undefined-parameter.xml");
+bad_input!(xml_unknown_bsdf_xml, "xml-unknown-bsdf.xml");
+bad_input!(xml_unknown_conductor_xml, "xml-unknown-conductor.xml");
+bad_input!(xml_unknown_emitter_xml, "xml-unknown-emitter.xml");
+bad_input!(xml_unknown_integrator_xml, "xml-unknown-integrator.xml");
+bad_input!(xml_unknown_sensor_xml, "xml-unknown-sensor.xml");
+bad_input!(xml_unknown_shape_xml, "xml-unknown-shape.xml");
+bad_input!(xml_wrong_property_type_xml, "xml-wrong-property-type.xml");
+bad_input!(xml_zero_area_emitter_xml, "xml-zero-area-emitter.xml");
+
+/// Every file of the corpus has its test above, and the corpus is as large as promised.
+#[test]
+fn every_corpus_file_is_tested() {
+    let listed = include_str!("bad_inputs.rs");
+    let mut n = 0;
+    for e in std::fs::read_dir(corpus()).unwrap() {
+        let name = e.unwrap().file_name().to_string_lossy().into_owned();
+        assert!(
+            listed.contains(&format!("\"{name}\")")),
+            "{name} has no test"
+        );
+        n += 1;
+    }
+    assert!(n >= 40, "only {n} bad inputs");
+}
