@@ -212,7 +212,7 @@ fn every_corpus_file_is_tested() {
     for e in std::fs::read_dir(corpus()).unwrap() {
         let name = e.unwrap().file_name().to_string_lossy().into_owned();
         assert!(
-            listed.contains(&format!("\"{name}\")")),
+            listed.contains(&format!("\"{name}\"")),
             "{name} has no test"
         );
         n += 1;

@@ -56,6 +56,25 @@ impl Document {
         })
     }
 
+    /// Like `load`, for a scene whose text is already in memory (`path` names it in errors
+    /// and anchors its includes).
+    pub fn parse(
+        path: &Path,
+        text: &str,
+        defines: &[(String, String)],
+    ) -> Result<Document, SceneError> {
+        let mut r = Reader {
+            files: Vec::new(),
+            params: defines.iter().cloned().collect(),
+            stack: Vec::new(),
+        };
+        let root = r.read_text(path, text)?;
+        Ok(Document {
+            files: r.files,
+            root,
+        })
+    }
+
     pub fn err(&self, e: &Elem, msg: impl Into<String>) -> SceneError {
         SceneError::new(&self.files[e.file], Some(e.pos), msg)
     }
@@ -99,11 +118,16 @@ impl Reader {
                     .join(" → ")
             )));
         }
+        self.read_text(path, &text)
+    }
+
+    /// Parses one file's text and returns its `<scene>` element.
+    fn read_text(&mut self, path: &Path, text: &str) -> Result<Elem, SceneError> {
         let opts = roxmltree::ParsingOptions {
             allow_dtd: false,
             nodes_limit: 50_000_000,
         };
-        let doc = roxmltree::Document::parse_with_options(&text, opts).map_err(|e| {
+        let doc = roxmltree::Document::parse_with_options(text, opts).map_err(|e| {
             let p = e.pos();
             SceneError::new(
                 path,
@@ -135,7 +159,8 @@ impl Reader {
                 "<scene> needs a version attribute, e.g. <scene version=\"3.0.0\">",
             ));
         }
-        self.stack.push(canon);
+        self.stack
+            .push(path.canonicalize().unwrap_or_else(|_| path.to_path_buf()));
         let r = self.convert(&doc, root, file, path, 0);
         self.stack.pop();
         r

@@ -32,3 +32,10 @@ pub fn load_xml(path: &Path, opts: &XmlOptions) -> Result<SceneDesc, SceneError>
     let doc = document::Document::load(path, &opts.defines)?;
     objects::build(&doc, opts.lenient)
 }
+
+/// Reads a Mitsuba 3 XML scene from text (`path` names it in errors and anchors relative
+/// file names).
+pub fn parse_xml(path: &Path, text: &str, opts: &XmlOptions) -> Result<SceneDesc, SceneError> {
+    let doc = document::Document::parse(path, text, &opts.defines)?;
+    objects::build(&doc, opts.lenient)
+}
