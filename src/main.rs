@@ -23,11 +23,17 @@ struct Cli {
 enum Command {
     /// Render a scene to an image (.png: 8-bit sRGB, tone mapped; .exr: linear RGB).
     Render(RenderArgs),
-    /// Merge the sums files of `mcrt render --pass K/N` (all N of them, once each) into the
-    /// image a single render gives, bit for bit.
+    /// Merge the sums files of `render --pass K/N` into the image of a single render.
+    ///
+    /// Give all N passes, once each, in any order. They must come from the same scene file,
+    /// settings, seed, spp and mcrt version (checked: exit status 2 otherwise); the image is
+    /// then the one a single `mcrt render` writes, bit for bit.
     Merge(MergeArgs),
-    /// Compare image A with reference B (.exr): print RMSE, relMSE = mean((A−B)²/(B²+0.01))
-    /// and PSNR (peak 1) over all pixels and channels; optionally write a difference image.
+    /// Compare image A with a reference B: RMSE, relMSE, PSNR and a difference image.
+    ///
+    /// Over all pixels and channels of two .exr images of the same size: RMSE =
+    /// sqrt(mean((A−B)²)), relMSE = mean((A−B)²/(B²+0.01)), PSNR = 10·log10(1/MSE) dB (peak
+    /// 1).
     Compare(CompareArgs),
 }
 
@@ -165,8 +171,8 @@ struct CompareArgs {
     /// white where equal, red where A is brighter, blue where B is (.png or .exr).
     #[arg(long, value_name = "IMAGE")]
     diff: Option<PathBuf>,
-    /// The difference at which the map is pure red or blue (default: the largest |A − B| of
-    /// any pixel).
+    /// The difference at which the map is pure red or blue (default: the largest difference
+    /// of any pixel).
     #[arg(long, value_name = "D")]
     diff_range: Option<f64>,
 }
