@@ -187,16 +187,24 @@ fn temp_path(path: &Path) -> PathBuf {
 /// Writes the image in the format the extension names, atomically (temporary file + rename).
 pub fn write_image(path: &Path, img: &Image, opts: &WriteOptions) -> Result<(), ImageError> {
     let format = Format::from_path(path)?;
+    write_atomic(path, |tmp| match format {
+        Format::Png => write_png(tmp, img, opts),
+        Format::Exr => write_exr(tmp, img, opts.half),
+    })
+}
+
+/// Writes a file atomically: `write` fills a temporary file in the same directory, which is
+/// then renamed to `path` (and removed if anything fails).
+pub fn write_atomic(
+    path: &Path,
+    write: impl FnOnce(&Path) -> Result<(), String>,
+) -> Result<(), ImageError> {
     let tmp = temp_path(path);
     let io = |message: String| ImageError::Io {
         path: path.to_path_buf(),
         message,
     };
-    let result = match format {
-        Format::Png => write_png(&tmp, img, opts),
-        Format::Exr => write_exr(&tmp, img, opts.half),
-    };
-    if let Err(message) = result {
+    if let Err(message) = write(&tmp) {
         let _ = std::fs::remove_file(&tmp);
         return Err(io(message));
     }

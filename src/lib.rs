@@ -7,12 +7,14 @@
 
 pub mod accel;
 pub mod camera;
+pub mod compare;
 pub mod film;
 pub mod geometry;
 pub mod image;
 pub mod integrator;
 pub mod light;
 pub mod material;
+pub mod parts;
 pub mod render;
 pub mod sampler;
 pub mod scene;
@@ -38,7 +40,12 @@ pub enum Error {
     #[error("{0}")]
     Render(#[from] render::RenderError),
     #[error("{0}")]
+    Parts(#[from] parts::PartsError),
+    #[error("{0}")]
     Usage(String),
+    /// An input file (not a scene) that cannot be used.
+    #[error("{0}")]
+    Input(String),
 }
 
 impl Error {
@@ -47,6 +54,8 @@ impl Error {
         match self {
             Error::Scene(_)
             | Error::Usage(_)
+            | Error::Parts(_)
+            | Error::Input(_)
             | Error::Render(render::RenderError::NoCamera(..))
             | Error::Render(render::RenderError::NoCameras) => 2,
             Error::Image(

@@ -2,8 +2,9 @@
 
 use clap::{Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use mcrt::image::{check_output_path, write_image, ToneMap, WriteOptions};
+use mcrt::image::{check_output_path, write_image, Format, ToneMap, WriteOptions};
 use mcrt::integrator::IntegratorKind;
+use mcrt::parts::{self, Pass};
 use mcrt::scene::desc::FileSettings;
 use mcrt::scene::{Scene, SceneError};
 use mcrt::Error;
@@ -22,6 +23,18 @@ struct Cli {
 enum Command {
     /// Render a scene to an image (.png: 8-bit sRGB, tone mapped; .exr: linear RGB).
     Render(RenderArgs),
+    /// Merge the sums files of `render --pass K/N` into the image of a single render.
+    ///
+    /// Give all N passes, once each, in any order. They must come from the same scene file,
+    /// settings, seed, spp and mcrt version (checked: exit status 2 otherwise); the image is
+    /// then the one a single `mcrt render` writes, bit for bit.
+    Merge(MergeArgs),
+    /// Compare image A with a reference B: RMSE, relMSE, PSNR and a difference image.
+    ///
+    /// Over all pixels and channels of two .exr images of the same size: RMSE =
+    /// sqrt(mean((A−B)²)), relMSE = mean((A−B)²/(B²+0.01)), PSNR = 10·log10(1/MSE) dB (peak
+    /// 1).
+    Compare(CompareArgs),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -95,6 +108,19 @@ struct RenderArgs {
     /// Camera to render, by name (default: the scene's, else its first).
     #[arg(long)]
     camera: Option<String>,
+    #[command(flatten)]
+    image: ImageArgs,
+    /// Render only pass K of N (1-based): samples [⌊(K−1)·spp/N⌋, ⌊K·spp/N⌋) of every pixel,
+    /// written as a sums file (-o must be .exr) for `mcrt merge`.
+    #[arg(long, value_name = "K/N")]
+    pass: Option<mcrt::parts::Pass>,
+    /// No progress bar and no summary line.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+#[derive(clap::Args)]
+struct ImageArgs {
     /// Exposure in stops for PNG output (pixel values times 2^EV).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     exposure: f32,
@@ -104,15 +130,59 @@ struct RenderArgs {
     /// Write EXR as 16-bit half floats.
     #[arg(long)]
     half: bool,
-    /// No progress bar and no summary line.
+}
+
+impl ImageArgs {
+    fn options(&self) -> WriteOptions {
+        WriteOptions {
+            exposure: self.exposure,
+            tonemap: match self.tonemap {
+                ToneMapArg::Clamp => ToneMap::Clamp,
+                ToneMapArg::Reinhard => ToneMap::Reinhard,
+                ToneMapArg::Aces => ToneMap::Aces,
+            },
+            half: self.half,
+        }
+    }
+}
+
+#[derive(clap::Args)]
+struct MergeArgs {
+    /// The sums files of passes 1/N … N/N, in any order.
+    #[arg(required = true, value_name = "PART")]
+    parts: Vec<PathBuf>,
+    /// Output image (.png or .exr).
     #[arg(short, long)]
-    quiet: bool,
+    output: PathBuf,
+    /// Also write the merged sums (a sums file of pass 1/1) here (.exr).
+    #[arg(long, value_name = "SUMS.exr")]
+    keep_sums: Option<PathBuf>,
+    #[command(flatten)]
+    image: ImageArgs,
+}
+
+#[derive(clap::Args)]
+struct CompareArgs {
+    /// The image under test (.exr).
+    a: PathBuf,
+    /// The reference (.exr).
+    b: PathBuf,
+    /// Write a false-colour map of the per-pixel difference (mean over channels of A − B):
+    /// white where equal, red where A is brighter, blue where B is (.png or .exr).
+    #[arg(long, value_name = "IMAGE")]
+    diff: Option<PathBuf>,
+    /// The difference at which the map is pure red or blue (default: the largest difference
+    /// of any pixel).
+    #[arg(long, value_name = "D")]
+    diff_range: Option<f64>,
 }
 
 fn main() {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => render(args),
+        Command::Merge(args) => merge(args),
+        Command::Compare(args) => compare(args),
     };
     if let Err(e) = result {
         eprintln!("error: {e}");
@@ -125,7 +195,13 @@ fn render(a: RenderArgs) -> Result<(), Error> {
         PathBuf::from(a.scene.file_stem().unwrap_or_default()).with_extension("png")
     });
     // Fail on a bad output path now, not after a long render.
-    check_output_path(&output)?;
+    let format = check_output_path(&output)?;
+    if a.pass.is_some() && format != Format::Exr {
+        return Err(Error::Usage(format!(
+            "{}: --pass writes a sums file, which must be .exr",
+            output.display()
+        )));
+    }
     let max_depth = match a.max_depth {
         None | Some(-1) => None,
         Some(d) if d >= 0 && d <= u32::MAX as i64 => Some(d as u32),
@@ -208,7 +284,8 @@ fn render(a: RenderArgs) -> Result<(), Error> {
     let load_time = t_load.elapsed();
 
     let (_, _, fw, fh) = settings.window();
-    let total = fw as u64 * fh as u64 * settings.spp as u64;
+    let total =
+        fw as u64 * fh as u64 * a.pass.map_or(settings.spp, |p| p.share(settings.spp).1) as u64;
     let show = !a.quiet && std::io::stderr().is_terminal();
     let bar = if show {
         let b = ProgressBar::new(total);
@@ -220,28 +297,35 @@ fn render(a: RenderArgs) -> Result<(), Error> {
     } else {
         ProgressBar::hidden()
     };
-    let (film, stats) = mcrt::render::render(&scene, &settings, &|n| bar.inc(n))?;
+    let pass = a.pass.unwrap_or(Pass { k: 1, n: 1 });
+    let (film, stats) = parts::render_pass(&scene, &settings, pass, &|n| bar.inc(n))?;
     bar.finish_and_clear();
 
-    let opts = WriteOptions {
-        exposure: a.exposure,
-        tonemap: match a.tonemap {
-            ToneMapArg::Clamp => ToneMap::Clamp,
-            ToneMapArg::Reinhard => ToneMap::Reinhard,
-            ToneMapArg::Aces => ToneMap::Aces,
-        },
-        half: a.half,
-    };
-    write_image(&output, &film.image(), &opts)?;
+    match a.pass {
+        Some(pass) => {
+            let bytes = std::fs::read(&a.scene).unwrap_or_default();
+            let extra = format!("defines={:?} lenient={}", a.define, a.lenient);
+            let meta = parts::PartMeta::new(&a.scene, &bytes, &extra, &settings, pass);
+            parts::write_part(&output, &parts::Part { meta, film })?;
+        }
+        None => write_image(&output, &film.image(), &a.image.options())?,
+    }
     if !a.quiet {
         let secs = stats.elapsed.as_secs_f64().max(1e-9);
         let rays = stats.rays.rays + stats.rays.shadow_rays;
         eprintln!(
-            "{}: {}x{} at {} spp ({}, {} primitives, {} lights, loaded in {:.2} s) in {:.2} s: {:.2} M samples/s, {:.2} M rays/s ({:.2} M shadow rays/s)",
+            "{}: {}x{} at {} spp{} ({}, {} primitives, {} lights, loaded in {:.2} s) in {:.2} s: {:.2} M samples/s, {:.2} M rays/s ({:.2} M shadow rays/s)",
             output.display(),
             fw,
             fh,
             settings.spp,
+            match a.pass {
+                Some(p) => {
+                    let (first, count) = p.share(settings.spp);
+                    format!(", pass {p}: samples {first}..{}", first + count)
+                }
+                None => String::new(),
+            },
             settings.params.kind.name(),
             scene.prims.len(),
             scene.lights.lights.len() + scene.lights.others.len(),
@@ -255,6 +339,70 @@ fn render(a: RenderArgs) -> Result<(), Error> {
             let (x, y) = stats.first_dropped.unwrap_or_default();
             eprintln!("warning: {} samples were NaN or infinite and were dropped (first at pixel {x}, {y})", stats.dropped);
         }
+    }
+    Ok(())
+}
+
+fn merge(a: MergeArgs) -> Result<(), Error> {
+    check_output_path(&a.output)?;
+    if let Some(k) = &a.keep_sums {
+        if check_output_path(k)? != Format::Exr {
+            return Err(Error::Usage(format!(
+                "{}: --keep-sums writes a sums file, which must be .exr",
+                k.display()
+            )));
+        }
+    }
+    let mut list = Vec::with_capacity(a.parts.len());
+    for p in &a.parts {
+        list.push((p.clone(), parts::read_part(p)?));
+    }
+    let merged = parts::merge(&list)?;
+    write_image(&a.output, &merged.film.image(), &a.image.options())?;
+    if let Some(k) = &a.keep_sums {
+        parts::write_part(k, &merged)?;
+    }
+    Ok(())
+}
+
+fn compare(a: CompareArgs) -> Result<(), Error> {
+    if let Some(d) = &a.diff {
+        check_output_path(d)?;
+    }
+    if let Some(r) = a.diff_range {
+        if !(r > 0.0 && r.is_finite()) {
+            return Err(Error::Usage(format!(
+                "--diff-range must be a positive number, got {r}"
+            )));
+        }
+    }
+    let read = |p: &PathBuf| -> Result<mcrt::image::Image, Error> {
+        if Format::from_path(p).ok() != Some(Format::Exr) {
+            return Err(Error::Input(format!(
+                "{}: compare reads OpenEXR images (.exr)",
+                p.display()
+            )));
+        }
+        mcrt::image::read_exr(p).map_err(|e| Error::Input(e.to_string()))
+    };
+    let (img_a, img_b) = (read(&a.a)?, read(&a.b)?);
+    let m = mcrt::compare::metrics(&img_a, &img_b)
+        .map_err(|e| Error::Input(format!("{} and {}: {e}", a.a.display(), a.b.display())))?;
+    println!("RMSE   {}", m.rmse);
+    println!("relMSE {}", m.rel_mse);
+    println!("PSNR   {} dB", m.psnr);
+    if let Some(d) = &a.diff {
+        let range = a.diff_range.unwrap_or(if m.max_abs_mean > 0.0 {
+            m.max_abs_mean
+        } else {
+            1.0
+        });
+        let img = mcrt::compare::diff_image(&img_a, &img_b, range);
+        write_image(d, &img, &WriteOptions::default())?;
+        eprintln!(
+            "{}: white = equal, red = A brighter by {range} or more, blue = B brighter",
+            d.display()
+        );
     }
     Ok(())
 }

@@ -170,7 +170,7 @@ fn compare(name: &str, film: &Film, expected: f64, unit: Unit) -> Result<(), Str
                 s[1] == s[0] && s[2] == s[0],
                 "{name}: pixel {i} is not grey"
             );
-            s[0] / film.count[i] as f64
+            mcrt::film::sum_to_f64(s[0]) / film.count[i] as f64
         })
         .collect();
     let at = |x: i64, y: i64| (y * w + x) as usize;
