@@ -720,12 +720,14 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                 };
                 GeometryDesc::Mesh(mesh)
             }
-            other => return cx.err(
-                s.kind.span(),
-                format!(
+            other => {
+                return cx.err(
+                    s.kind.span(),
+                    format!(
                     "unknown shape type '{other}' (expected triangle, quad, sphere, disk or mesh)"
                 ),
-            ),
+                )
+            }
         };
         if let (Some(e), GeometryDesc::Mesh(m)) = (&s.emission, &geometry) {
             let area: f32 = m
