@@ -224,3 +224,96 @@ fn toml_materials_twin_describes_the_xml_scene() {
 fn toml_textures_twin_describes_the_xml_scene() {
     twin_matches_xml("textures");
 }
+
+/// A TOML scene written next to the feature data (so that relative files resolve there).
+fn parse(text: &str) -> SceneDesc {
+    let path = project_path("tests/data/toml/inline.toml");
+    mcrt::scene::toml::parse_toml(&path, text).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn mesh_of(d: &SceneDesc, i: usize) -> &TriangleMesh {
+    match &d.shapes[i].geometry {
+        GeometryDesc::Mesh(m) => m,
+        _ => panic!("shape {i} is not a mesh"),
+    }
+}
+
+#[test]
+fn toml_render_rr_depth_and_hide_emitters() {
+    let d = parse("[render]\nrr_depth = 3\nhide_emitters = true\n");
+    assert_eq!(d.settings.rr_depth, Some(3));
+    assert_eq!(d.settings.hide_emitters, Some(true));
+    let d = parse("");
+    assert_eq!(d.settings.rr_depth, None);
+    assert_eq!(d.settings.hide_emitters, None);
+}
+
+#[test]
+fn toml_smooth_computes_drops_or_keeps_normals() {
+    let d = parse(
+        "[[shape]]\ntype = \"mesh\"\nfile = \"pyramid.ply\"\n\n\
+         [[shape]]\ntype = \"mesh\"\nfile = \"pyramid.ply\"\nsmooth = true\n\n\
+         [[shape]]\ntype = \"mesh\"\nfile = \"quad.obj\"\n\n\
+         [[shape]]\ntype = \"mesh\"\nfile = \"quad.obj\"\nsmooth = false\n\n\
+         [[shape]]\ntype = \"mesh\"\npositions = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]\nindices = [[0, 1, 2]]\nsmooth = true\n",
+    );
+    assert!(
+        mesh_of(&d, 0).normals.is_none(),
+        "PLY without normals: flat"
+    );
+    let mut smooth = mesh_of(&d, 0).clone();
+    smooth.recompute_vertex_normals();
+    assert_eq!(mesh_of(&d, 1).normals, smooth.normals, "smooth = true");
+    assert!(mesh_of(&d, 2).normals.is_some(), "OBJ normals kept");
+    assert!(
+        mesh_of(&d, 3).normals.is_none(),
+        "smooth = false drops them"
+    );
+    assert!(mesh_of(&d, 4).normals.is_some(), "inline smooth = true");
+    // OBJ texture coordinates are flipped: vt (0, 0) becomes (0, 1).
+    assert_eq!(
+        mesh_of(&d, 2).uvs.as_ref().unwrap()[0],
+        glam::Vec2::new(0.0, 1.0)
+    );
+}
+
+#[test]
+fn toml_defaults_of_the_new_materials_and_lights() {
+    let d = parse(
+        "[material.p]\ntype = \"plastic\"\n\n\
+         [material.m]\ntype = \"conductor\"\n\n\
+         [material.r]\ntype = \"roughconductor\"\nmaterial = \"Au\"\n\n\
+         [[light]]\ntype = \"environment\"\nradiance = 0.5\n",
+    );
+    // BTreeMap order: m, p, r.
+    let dbg: Vec<String> = d
+        .materials
+        .iter()
+        .map(|m| format!("{:?}", m.bsdf))
+        .collect();
+    let plastic =
+        mcrt::material::Plastic::new(1.49, mcrt::Color::splat(0.5), mcrt::Color::ONE, false);
+    assert!(
+        dbg[0].starts_with("Mirror"),
+        "conductor 'none' is a mirror: {}",
+        dbg[0]
+    );
+    assert_eq!(
+        dbg[1],
+        format!("{:?}", mcrt::material::Bsdf::Plastic(plastic))
+    );
+    let (eta, k) = mcrt::material::conductor::conductor_ior("Au").unwrap();
+    let gold = mcrt::material::RoughConductor::new(0.1, 0.1, eta, k, mcrt::Color::ONE);
+    assert_eq!(
+        dbg[2],
+        format!("{:?}", mcrt::material::Bsdf::RoughConductor(gold))
+    );
+    assert!(d
+        .materials
+        .iter()
+        .all(|m| m.two_sided && m.texture.is_none()));
+    assert_eq!(
+        format!("{:?}", d.lights),
+        "[Constant { radiance: Vec3(0.5, 0.5, 0.5) }]"
+    );
+}
