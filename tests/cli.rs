@@ -166,6 +166,122 @@ fn missing_obj_file() {
     );
 }
 
+#[test]
+fn unknown_texture() {
+    bad_scene(
+        "unknown-texture",
+        "[texture.checks]\ntype = \"checkerboard\"\n\n[material.floor]\ntype = \"lambert\"\nalbedo = \"chekcs\"\n",
+        loc("albedo = \"chekcs\"", "\"chekcs\""),
+        &["unknown texture 'chekcs'", "defined: checks"],
+    );
+}
+
+#[test]
+fn texture_name_where_a_colour_is_needed() {
+    bad_scene(
+        "texture-emission",
+        "[texture.checks]\ntype = \"checkerboard\"\n\n[[shape]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nemission = \"checks\"\n",
+        loc("emission = \"checks\"", "\"checks\""),
+        &["'emission' must be a colour", "not a texture"],
+    );
+}
+
+#[test]
+fn missing_texture_file() {
+    bad_scene(
+        "missing-texture",
+        "[texture.wood]\ntype = \"bitmap\"\nfile = \"textures/wood.png\"\n",
+        loc("file = \"textures/wood.png\"", "\"textures"),
+        &["texture file 'textures/wood.png' not found"],
+    );
+}
+
+#[test]
+fn alpha_not_positive() {
+    bad_scene(
+        "alpha-zero",
+        "[material.metal]\ntype = \"roughconductor\"\nmaterial = \"Cu\"\nalpha = 0\n",
+        loc("alpha = 0", "0"),
+        &["'alpha' (GGX roughness) must be a finite number > 0"],
+    );
+    bad_scene(
+        "alpha-negative",
+        "[material.glass]\ntype = \"roughdielectric\"\nalpha_u = 0.1\nalpha_v = -0.2\n",
+        loc("alpha_v = -0.2", "-0.2"),
+        &["'alpha_v' (GGX roughness) must be a finite number > 0"],
+    );
+}
+
+#[test]
+fn alpha_and_alpha_u_together() {
+    bad_scene(
+        "alpha-both",
+        "[material.metal]\ntype = \"roughconductor\"\nalpha = 0.1\nalpha_u = 0.2\nalpha_v = 0.3\n",
+        loc("alpha = 0.1", "0.1"),
+        &["either 'alpha' or 'alpha_u' and 'alpha_v'"],
+    );
+}
+
+#[test]
+fn unknown_conductor_material() {
+    bad_scene(
+        "conductor-name",
+        "[material.metal]\ntype = \"conductor\"\nmaterial = \"Gold\"\n",
+        loc("material = \"Gold\"", "\"Gold\""),
+        &["unknown conductor material 'Gold'", "none", "Au"],
+    );
+}
+
+#[test]
+fn plastic_specular_above_one() {
+    bad_scene(
+        "plastic-specular",
+        "[material.red]\ntype = \"plastic\"\nalbedo = [0.7, 0.1, 0.1]\nspecular = 1.5\n",
+        loc("specular = 1.5", "1.5"),
+        &["'specular' must be at most 1"],
+    );
+}
+
+#[test]
+fn unknown_light_type() {
+    bad_scene(
+        "light-type",
+        "[[light]]\ntype = \"spot\"\nposition = [0, 1, 0]\n",
+        loc("type = \"spot\"", "\"spot\""),
+        &["unknown light type 'spot'", "point, directional, constant"],
+    );
+}
+
+#[test]
+fn directional_light_without_direction() {
+    bad_scene(
+        "light-direction",
+        "[[light]]\ntype = \"directional\"\ndirection = [0, 0, 0]\nirradiance = 1\n",
+        loc("direction = [0, 0, 0]", "[0"),
+        &["'direction' must not be zero"],
+    );
+}
+
+#[test]
+fn bad_rr_depth() {
+    bad_scene(
+        "rr-depth",
+        "[render]\nrr_depth = 0\n",
+        loc("rr_depth = 0", "0"),
+        &["'rr_depth' must be at least 1"],
+    );
+}
+
+#[test]
+fn unsupported_mesh_file() {
+    bad_scene(
+        "mesh-ext",
+        "[[shape]]\ntype = \"mesh\"\nfile = \"bunny.stl\"\n",
+        loc("file = \"bunny.stl\"", "\"bunny"),
+        &["expected an .obj or .ply file"],
+    );
+}
+
 /// A scene that loads `mesh.obj` (written with `obj`); the error must point into the OBJ file.
 fn bad_obj(tag: &str, obj: &str, where_: Loc, expect: &[&str]) {
     let dir = TempDir::new(tag);

@@ -12,7 +12,36 @@ pub struct TriangleMesh {
     pub indices: Vec<[u32; 3]>,
 }
 
+/// Segments of the polygon that stands for a disk (its radius is enlarged so that the area,
+/// and so an emitter's power, is exact).
+pub const DISK_SEGMENTS: u32 = 256;
+
 impl TriangleMesh {
+    /// Mitsuba's `disk`: the unit disk in the xy plane, facing +z, as a regular polygon of
+    /// [`DISK_SEGMENTS`] sides and the same area (π), a fan around the centre, with planar
+    /// texture coordinates (x, y) ↦ ((x + 1)/2, (y + 1)/2).
+    pub fn unit_disk() -> TriangleMesh {
+        let n = DISK_SEGMENTS;
+        let step = std::f32::consts::TAU / n as f32;
+        // Area of the regular n-gon of circumradius R: (n/2)·R²·sin(2π/n) = π.
+        let r = (std::f32::consts::TAU / (n as f32 * step.sin())).sqrt();
+        let mut positions = vec![Vec3::ZERO];
+        for i in 0..n {
+            let a = i as f32 * step;
+            positions.push(Vec3::new(r * a.cos(), r * a.sin(), 0.0));
+        }
+        let uvs = positions
+            .iter()
+            .map(|p| glam::Vec2::new(0.5 * p.x + 0.5, 0.5 * p.y + 0.5))
+            .collect();
+        TriangleMesh {
+            positions,
+            normals: None,
+            uvs: Some(uvs),
+            indices: (0..n).map(|i| [0, 1 + i, 1 + (i + 1) % n]).collect(),
+        }
+    }
+
     /// v ↦ 1 − v: OBJ files put v = 0 at the bottom of an image, Mitsuba's textures at the
     /// top (Mitsuba's `flip_tex_coords`, on by default).
     pub fn flip_v(&mut self) {

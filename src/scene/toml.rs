@@ -2,40 +2,56 @@
 //!
 //! Every error names the file, line and column of the value at fault and what was expected.
 
-use super::desc::{FileSettings, GeometryDesc, SceneDesc, ShapeDesc};
+use super::desc::{FileSettings, GeometryDesc, LightDesc, SceneDesc, ShapeDesc};
 use super::obj::load_obj;
+use super::ply::load_ply;
 use super::SceneError;
 use crate::camera::{CameraDesc, FovAxis};
 use crate::geometry::mesh::TriangleMesh;
 use crate::integrator::IntegratorKind;
-use crate::material::{Bsdf, Dielectric, Lambert, Material, Mirror, OrenNayar};
+use crate::material::conductor::{conductor_ior, conductor_names};
+use crate::material::{
+    Bsdf, Conductor, Dielectric, Lambert, Material, Mirror, OrenNayar, Plastic, RoughConductor,
+    RoughDielectric, RoughPlastic, ThinDielectric,
+};
+use crate::texture::{Bitmap, BitmapTexture, FilterType, Texture, UvTransform, WrapMode};
 use crate::Color;
-use glam::{Vec2, Vec3};
+use glam::{Mat4, Vec2, Vec3};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::Path;
+use std::sync::Arc;
 use toml::Spanned;
 
 type V3 = [f32; 3];
 
-/// A colour: one number (grey) or three (linear RGB).
-#[derive(Deserialize, Clone, Copy)]
+/// A colour: one number (grey) or three (linear RGB); where a material's main colour is
+/// expected, also the name of a `[texture.NAME]`.
+#[derive(Deserialize, Clone)]
 #[serde(
     untagged,
-    expecting = "expected a colour: a number or an array of three numbers [r, g, b]"
+    expecting = "expected a colour: a number, an array of three numbers [r, g, b], or (for a material's main colour) the name of a texture"
 )]
 enum ColorT {
     Grey(f32),
     Rgb(V3),
+    Texture(String),
 }
 
 impl ColorT {
-    fn color(self) -> Color {
+    fn color(&self) -> Option<Color> {
         match self {
-            ColorT::Grey(g) => Color::splat(g),
-            ColorT::Rgb(c) => Color::from_array(c),
+            ColorT::Grey(g) => Some(Color::splat(*g)),
+            ColorT::Rgb(c) => Some(Color::from_array(*c)),
+            ColorT::Texture(_) => None,
         }
     }
+}
+
+/// The textures defined in the file: names and indices into `SceneDesc::textures`.
+struct Textures<'a> {
+    ids: BTreeMap<&'a str, u32>,
+    list: &'a [Texture],
 }
 
 #[derive(Deserialize)]
@@ -45,9 +61,13 @@ struct FileT {
     #[serde(default)]
     camera: Vec<Spanned<CameraT>>,
     #[serde(default)]
+    texture: BTreeMap<String, Spanned<TextureT>>,
+    #[serde(default)]
     material: BTreeMap<String, Spanned<MaterialT>>,
     #[serde(default)]
     shape: Vec<Spanned<ShapeT>>,
+    #[serde(default)]
+    light: Vec<Spanned<LightT>>,
 }
 
 #[derive(Deserialize)]
@@ -63,6 +83,8 @@ struct RenderT {
     rr_survival: Option<Spanned<f32>>,
     camera: Option<Spanned<String>>,
     sampler: Option<Spanned<String>>,
+    rr_depth: Option<Spanned<u32>>,
+    hide_emitters: Option<bool>,
 }
 
 #[derive(Deserialize)]
@@ -91,9 +113,44 @@ struct MaterialT {
     albedo: Option<Spanned<ColorT>>,
     sigma: Option<Spanned<f32>>,
     reflectance: Option<Spanned<ColorT>>,
+    specular: Option<Spanned<ColorT>>,
     ior: Option<Spanned<f32>>,
     ext_ior: Option<Spanned<f32>>,
+    material: Option<Spanned<String>>,
+    eta: Option<Spanned<ColorT>>,
+    k: Option<Spanned<ColorT>>,
+    alpha: Option<Spanned<f32>>,
+    alpha_u: Option<Spanned<f32>>,
+    alpha_v: Option<Spanned<f32>>,
+    nonlinear: Option<Spanned<bool>>,
     two_sided: Option<Spanned<bool>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TextureT {
+    #[serde(rename = "type")]
+    kind: Spanned<String>,
+    file: Option<Spanned<String>>,
+    raw: Option<Spanned<bool>>,
+    filter: Option<Spanned<String>>,
+    wrap: Option<Spanned<String>>,
+    color0: Option<Spanned<ColorT>>,
+    color1: Option<Spanned<ColorT>>,
+    uv_scale: Option<Spanned<[f32; 2]>>,
+    uv_offset: Option<Spanned<[f32; 2]>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LightT {
+    #[serde(rename = "type")]
+    kind: Spanned<String>,
+    position: Option<Spanned<V3>>,
+    intensity: Option<Spanned<ColorT>>,
+    direction: Option<Spanned<V3>>,
+    irradiance: Option<Spanned<ColorT>>,
+    radiance: Option<Spanned<ColorT>>,
 }
 
 #[derive(Deserialize)]
@@ -106,10 +163,13 @@ struct ShapeT {
     vertices: Option<Spanned<Vec<V3>>>,
     center: Option<Spanned<V3>>,
     radius: Option<Spanned<f32>>,
+    normal: Option<Spanned<V3>>,
     file: Option<Spanned<String>>,
     positions: Option<Spanned<Vec<V3>>>,
     indices: Option<Spanned<Vec<[u32; 3]>>>,
     normals: Option<Spanned<Vec<V3>>>,
+    uvs: Option<Spanned<Vec<[f32; 2]>>>,
+    smooth: Option<Spanned<bool>>,
 }
 
 /// Error helper bound to one file's text.
@@ -168,7 +228,12 @@ impl Ctx<'_> {
         }
     }
     fn color(&self, v: &Spanned<ColorT>, key: &str, max: Option<f32>) -> Result<Color, SceneError> {
-        let c = v.get_ref().color();
+        let Some(c) = v.get_ref().color() else {
+            return self.err(
+                v.span(),
+                format!("'{key}' must be a colour (a number or [r, g, b]), not a texture name"),
+            );
+        };
         if !c.is_finite() || c.min_element() < 0.0 {
             return self.err(v.span(), format!("'{key}' must be finite and not negative"));
         }
@@ -178,6 +243,80 @@ impl Ctx<'_> {
             }
         }
         Ok(c)
+    }
+}
+
+impl Ctx<'_> {
+    /// A material's main colour (a reflectance, at most 1): a colour, or a texture by name,
+    /// whose mean stands for it where the BSDF needs one value.
+    fn main_color(
+        &self,
+        v: &Spanned<ColorT>,
+        key: &str,
+        tex: &Textures,
+    ) -> Result<(Color, Option<u32>), SceneError> {
+        match v.get_ref() {
+            ColorT::Texture(name) => match tex.ids.get(name.as_str()) {
+                Some(&i) => Ok((tex.list[i as usize].mean(), Some(i))),
+                None => {
+                    let known: Vec<&str> = tex.ids.keys().copied().collect();
+                    self.err(
+                        v.span(),
+                        format!(
+                            "unknown texture '{name}' in '{key}' (defined: {}); give a colour or the name of a [texture.NAME]",
+                            list_or_none(&known)
+                        ),
+                    )
+                }
+            },
+            _ => Ok((self.color(v, key, Some(1.0))?, None)),
+        }
+    }
+
+    /// An index of refraction: finite and > 0.
+    fn ior(&self, v: &Option<Spanned<f32>>, key: &str, default: f32) -> Result<f32, SceneError> {
+        match v {
+            None => Ok(default),
+            Some(v) if v.get_ref().is_finite() && *v.get_ref() > 0.0 => Ok(*v.get_ref()),
+            Some(v) => self.err(
+                v.span(),
+                format!("'{key}' must be a positive index of refraction"),
+            ),
+        }
+    }
+
+    /// GGX roughness: `alpha` (default 0.1), or `alpha_u` and `alpha_v`.
+    fn roughness(
+        &self,
+        t: &MaterialT,
+        at: &std::ops::Range<usize>,
+    ) -> Result<(f32, f32), SceneError> {
+        let check = |v: &Spanned<f32>, key: &str| {
+            if v.get_ref().is_finite() && *v.get_ref() > 0.0 {
+                Ok(*v.get_ref())
+            } else {
+                self.err(
+                    v.span(),
+                    format!("'{key}' (GGX roughness) must be a finite number > 0, such as 0.1 (rough) or 0.01 (nearly smooth)"),
+                )
+            }
+        };
+        match (&t.alpha, &t.alpha_u, &t.alpha_v) {
+            (Some(a), None, None) => {
+                let a = check(a, "alpha")?;
+                Ok((a, a))
+            }
+            (None, None, None) => Ok((0.1, 0.1)),
+            (None, Some(u), Some(v)) => Ok((check(u, "alpha_u")?, check(v, "alpha_v")?)),
+            (Some(a), _, _) => self.err(
+                a.span(),
+                "give either 'alpha' or 'alpha_u' and 'alpha_v', not both",
+            ),
+            (None, u, v) => self.err(
+                u.as_ref().or(v.as_ref()).map_or(at.clone(), |s| s.span()),
+                "anisotropic roughness needs both 'alpha_u' and 'alpha_v'",
+            ),
+        }
     }
 }
 
@@ -318,9 +457,25 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
         desc.cameras.push((name, cd));
     }
 
+    for t in file.texture.values() {
+        let tex = texture(&cx, t, base)?;
+        desc.textures.push(tex);
+    }
+    let tex = Textures {
+        ids: file
+            .texture
+            .keys()
+            .enumerate()
+            .map(|(i, n)| (n.as_str(), i as u32))
+            .collect(),
+        list: &desc.textures,
+    };
+    let mut materials = Vec::new();
+    for m in file.material.values() {
+        materials.push(material(&cx, m, &tex)?);
+    }
     let mut material_ids: BTreeMap<&str, u32> = BTreeMap::new();
-    for (name, m) in &file.material {
-        let mat = material(&cx, m)?;
+    for (name, mat) in file.material.keys().zip(materials) {
         material_ids.insert(name.as_str(), desc.materials.len() as u32);
         desc.materials.push(mat);
     }
@@ -359,10 +514,13 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
             ("vertices", span_of(&s.vertices)),
             ("center", span_of(&s.center)),
             ("radius", span_of(&s.radius)),
+            ("normal", span_of(&s.normal)),
             ("file", span_of(&s.file)),
             ("positions", span_of(&s.positions)),
             ("indices", span_of(&s.indices)),
             ("normals", span_of(&s.normals)),
+            ("uvs", span_of(&s.uvs)),
+            ("smooth", span_of(&s.smooth)),
         ];
         let geometry = match s.kind.get_ref().as_str() {
             kind @ ("triangle" | "quad") => {
@@ -407,18 +565,44 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                     radius: *r.get_ref(),
                 }
             }
+            "disk" => {
+                let what = "a disk";
+                cx.only(&present, &["center", "normal", "radius"], what)?;
+                let center = cx.finite3(cx.need(&s.center, "center", what, &at)?, "center")?;
+                let nv = cx.need(&s.normal, "normal", what, &at)?;
+                let Some(n) = cx.finite3(nv, "normal")?.try_normalize() else {
+                    return cx.err(nv.span(), "'normal' must not be zero");
+                };
+                let r = cx.need(&s.radius, "radius", what, &at)?;
+                if !(r.get_ref().is_finite() && *r.get_ref() > 0.0) {
+                    return cx.err(r.span(), "'radius' must be a positive number");
+                }
+                let r = *r.get_ref();
+                // The unit disk's frame: x and y span the plane, z = x × y is the normal.
+                let x = n.any_orthonormal_vector();
+                let y = n.cross(x);
+                let m = Mat4::from_cols(
+                    (x * r).extend(0.0),
+                    (y * r).extend(0.0),
+                    n.extend(0.0),
+                    center.extend(1.0),
+                );
+                let mut disk = TriangleMesh::unit_disk();
+                disk.transform(&m);
+                GeometryDesc::Mesh(disk)
+            }
             "mesh" => {
                 cx.only(
                     &present,
-                    &["file", "positions", "indices", "normals"],
+                    &["file", "positions", "indices", "normals", "uvs", "smooth"],
                     "a mesh",
                 )?;
                 let mesh = match (&s.file, &s.positions) {
                     (Some(f), None) => {
-                        if s.indices.is_some() || s.normals.is_some() {
+                        if s.indices.is_some() || s.normals.is_some() || s.uvs.is_some() {
                             return cx.err(
                                 f.span(),
-                                "a mesh takes either 'file' or 'positions' and 'indices', not both",
+                                "a mesh takes either 'file' or 'positions' and 'indices' (with optional 'normals' and 'uvs'), not both",
                             );
                         }
                         let p = base.join(f.get_ref());
@@ -427,11 +611,11 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                             .and_then(|e| e.to_str())
                             .unwrap_or("")
                             .to_ascii_lowercase();
-                        if ext != "obj" {
+                        if ext != "obj" && ext != "ply" {
                             return cx.err(
                                 f.span(),
                                 format!(
-                                    "unsupported mesh file '{}' (expected an .obj file)",
+                                    "unsupported mesh file '{}' (expected an .obj or .ply file)",
                                     f.get_ref()
                                 ),
                             );
@@ -446,8 +630,18 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                                 ),
                             );
                         }
-                        let mut m = load_obj(&p)?;
-                        m.flip_v();
+                        let mut m = if ext == "obj" {
+                            let mut m = load_obj(&p)?;
+                            m.flip_v();
+                            m
+                        } else {
+                            load_ply(&p)?.into_triangle_mesh()
+                        };
+                        match s.smooth.as_ref().map(|v| *v.get_ref()) {
+                            Some(true) if m.normals.is_none() => m.recompute_vertex_normals(),
+                            Some(false) => m.normals = None,
+                            _ => {}
+                        }
                         m
                     }
                     (None, Some(pos)) => {
@@ -481,12 +675,41 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                             ),
                             None => None,
                         };
-                        TriangleMesh {
+                        let uvs = match &s.uvs {
+                            Some(uv) if uv.get_ref().len() != pos.get_ref().len() => {
+                                return cx.err(
+                                    uv.span(),
+                                    format!(
+                                        "'uvs' needs one [u, v] per position ({}), found {}",
+                                        n,
+                                        uv.get_ref().len()
+                                    ),
+                                );
+                            }
+                            Some(uv) if !uv.get_ref().iter().flatten().all(|c| c.is_finite()) => {
+                                return cx.err(uv.span(), "uvs must be finite numbers");
+                            }
+                            Some(uv) => Some(uv.get_ref().iter().map(|t| Vec2::from(*t)).collect()),
+                            None => None,
+                        };
+                        let mut m = TriangleMesh {
                             positions: pos.get_ref().iter().map(|p| Vec3::from(*p)).collect(),
                             normals,
-                            uvs: None,
+                            uvs,
                             indices: idx.get_ref().clone(),
+                        };
+                        if let Some(sm) = &s.smooth {
+                            if m.normals.is_some() {
+                                return cx.err(
+                                    sm.span(),
+                                    "'smooth' does not apply to a mesh with 'normals' (the normals given are used)",
+                                );
+                            }
+                            if *sm.get_ref() {
+                                m.recompute_vertex_normals();
+                            }
                         }
+                        m
                     }
                     _ => {
                         return cx.err(
@@ -501,8 +724,8 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                 return cx.err(
                     s.kind.span(),
                     format!(
-                        "unknown shape type '{other}' (expected triangle, quad, sphere or mesh)"
-                    ),
+                    "unknown shape type '{other}' (expected triangle, quad, sphere, disk or mesh)"
+                ),
                 )
             }
         };
@@ -515,7 +738,7 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                     0.5 * (b - a).cross(c - a).length()
                 })
                 .sum();
-            if !(area > 0.0) {
+            if area.is_nan() || area <= 0.0 {
                 return cx.err(e.span(), "an emitting shape must have a positive area");
             }
         }
@@ -524,6 +747,9 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
             material,
             emission,
         });
+    }
+    for light in &file.light {
+        desc.lights.push(light_desc(&cx, light)?);
     }
     if let Some(name) = &desc.settings.camera {
         if !desc.cameras.iter().any(|(n, _)| n == name) {
@@ -617,60 +843,314 @@ fn settings(cx: &Ctx, r: &RenderT) -> Result<FileSettings, SceneError> {
         shadow_rays: positive(&r.shadow_rays, "shadow_rays")?,
         rr_survival,
         camera: r.camera.as_ref().map(|c| c.get_ref().clone()),
+        rr_depth: positive(&r.rr_depth, "rr_depth")?,
+        hide_emitters: r.hide_emitters,
         ..Default::default()
     })
 }
 
-fn material(cx: &Ctx, m: &Spanned<MaterialT>) -> Result<Material, SceneError> {
+fn material(cx: &Ctx, m: &Spanned<MaterialT>, tex: &Textures) -> Result<Material, SceneError> {
     let t = m.get_ref();
     let at = m.span();
     let present = [
         ("albedo", span_of(&t.albedo)),
         ("sigma", span_of(&t.sigma)),
         ("reflectance", span_of(&t.reflectance)),
+        ("specular", span_of(&t.specular)),
         ("ior", span_of(&t.ior)),
         ("ext_ior", span_of(&t.ext_ior)),
+        ("material", span_of(&t.material)),
+        ("eta", span_of(&t.eta)),
+        ("k", span_of(&t.k)),
+        ("alpha", span_of(&t.alpha)),
+        ("alpha_u", span_of(&t.alpha_u)),
+        ("alpha_v", span_of(&t.alpha_v)),
+        ("nonlinear", span_of(&t.nonlinear)),
         ("two_sided", span_of(&t.two_sided)),
     ];
     let two_sided = t.two_sided.as_ref().is_none_or(|v| *v.get_ref());
-    let bsdf = match t.kind.get_ref().as_str() {
+    let kind = t.kind.get_ref().as_str();
+    let what = format!(
+        "{} {kind} material",
+        if kind.starts_with(['a', 'e', 'i', 'o', 'u']) {
+            "an"
+        } else {
+            "a"
+        }
+    );
+    // A main colour: required, or with a default.
+    let main = |v: &Option<Spanned<ColorT>>, key: &str, default: Option<f32>| match (v, default) {
+        (Some(v), _) => cx.main_color(v, key, tex),
+        (None, Some(d)) => Ok((Color::splat(d), None)),
+        (None, None) => cx.need(v, key, &what, &at).map(|_| unreachable!()),
+    };
+    let eta_of = |default: f32| -> Result<f32, SceneError> {
+        Ok(cx.ior(&t.ior, "ior", default)? / cx.ior(&t.ext_ior, "ext_ior", 1.0)?)
+    };
+    let mut texture = None;
+    let bsdf = match kind {
         "lambert" => {
-            cx.only(&present, &["albedo", "two_sided"], "a lambert material")?;
-            Bsdf::Lambert(Lambert { albedo: cx.color(cx.need(&t.albedo, "albedo", "a lambert material", &at)?, "albedo", Some(1.0))? })
+            cx.only(&present, &["albedo", "two_sided"], &what)?;
+            let (albedo, tx) = main(&t.albedo, "albedo", None)?;
+            texture = tx;
+            Bsdf::Lambert(Lambert { albedo })
         }
         "oren_nayar" => {
-            cx.only(&present, &["albedo", "sigma", "two_sided"], "an oren_nayar material")?;
-            let albedo = cx.color(cx.need(&t.albedo, "albedo", "an oren_nayar material", &at)?, "albedo", Some(1.0))?;
-            let sigma = cx.need(&t.sigma, "sigma", "an oren_nayar material", &at)?;
+            cx.only(&present, &["albedo", "sigma", "two_sided"], &what)?;
+            let (albedo, tx) = main(&t.albedo, "albedo", None)?;
+            texture = tx;
+            let sigma = cx.need(&t.sigma, "sigma", &what, &at)?;
             if !(sigma.get_ref().is_finite() && *sigma.get_ref() >= 0.0 && *sigma.get_ref() <= 90.0) {
                 return cx.err(sigma.span(), "'sigma' (roughness, in degrees) must be between 0 and 90");
             }
             Bsdf::OrenNayar(OrenNayar::new(albedo, sigma.get_ref().to_radians()))
         }
         "mirror" => {
-            cx.only(&present, &["reflectance", "two_sided"], "a mirror material")?;
-            let r = t.reflectance.as_ref().map(|r| cx.color(r, "reflectance", Some(1.0))).transpose()?.unwrap_or(Color::ONE);
-            Bsdf::Mirror(Mirror { reflectance: r })
+            cx.only(&present, &["reflectance", "two_sided"], &what)?;
+            let (reflectance, tx) = main(&t.reflectance, "reflectance", Some(1.0))?;
+            texture = tx;
+            Bsdf::Mirror(Mirror { reflectance })
         }
         "dielectric" => {
-            cx.only(&present, &["ior", "ext_ior"], "a dielectric material")?;
-            let ior = cx.need(&t.ior, "ior", "a dielectric material", &at)?;
-            let check = |v: &Spanned<f32>, key: &str| {
-                if v.get_ref().is_finite() && *v.get_ref() > 0.0 {
-                    Ok(*v.get_ref())
-                } else {
-                    cx.err(v.span(), format!("'{key}' must be a positive index of refraction"))
+            cx.only(&present, &["ior", "ext_ior"], &what)?;
+            cx.need(&t.ior, "ior", &what, &at)?;
+            Bsdf::Dielectric(Dielectric { eta: eta_of(1.5046)? })
+        }
+        "thindielectric" => {
+            cx.only(&present, &["ior", "ext_ior"], &what)?;
+            Bsdf::ThinDielectric(ThinDielectric::new(eta_of(1.5046)?))
+        }
+        "roughdielectric" => {
+            cx.only(&present, &["ior", "ext_ior", "alpha", "alpha_u", "alpha_v"], &what)?;
+            let (au, av) = cx.roughness(t, &at)?;
+            Bsdf::RoughDielectric(RoughDielectric::new(au, av, eta_of(1.5046)?))
+        }
+        "conductor" | "roughconductor" => {
+            let rough = kind == "roughconductor";
+            let mut keys = vec!["material", "eta", "k", "reflectance", "two_sided"];
+            if rough {
+                keys.extend(["alpha", "alpha_u", "alpha_v"]);
+            }
+            cx.only(&present, &keys, &what)?;
+            let (eta, k) = match (&t.material, &t.eta, &t.k) {
+                (Some(name), None, None) => conductor_ior(name.get_ref()).map_or_else(
+                    || {
+                        cx.err(
+                            name.span(),
+                            format!(
+                                "unknown conductor material '{}' (expected none or one of {})",
+                                name.get_ref(),
+                                conductor_names().collect::<Vec<_>>().join(", ")
+                            ),
+                        )
+                    },
+                    Ok,
+                )?,
+                (None, None, None) => (Color::ZERO, Color::ONE),
+                (None, Some(eta), Some(k)) => (cx.color(eta, "eta", None)?, cx.color(k, "k", None)?),
+                (Some(name), _, _) => {
+                    return cx.err(name.span(), "give either 'material' or 'eta' and 'k', not both")
+                }
+                (None, eta, k) => {
+                    let span = eta.as_ref().or(k.as_ref()).map_or(at.clone(), |v| v.span());
+                    return cx.err(span, "a conductor's index of refraction needs both 'eta' and 'k' (or a named 'material')");
                 }
             };
-            let int = check(ior, "ior")?;
-            let ext = t.ext_ior.as_ref().map(|v| check(v, "ext_ior")).transpose()?.unwrap_or(1.0);
-            Bsdf::Dielectric(Dielectric { eta: int / ext })
+            let (r, tx) = main(&t.reflectance, "reflectance", Some(1.0))?;
+            texture = tx;
+            if rough {
+                let (au, av) = cx.roughness(t, &at)?;
+                Bsdf::RoughConductor(RoughConductor::new(au, av, eta, k, r))
+            } else if eta == Color::ZERO && k == Color::ONE {
+                // material = "none": a perfect mirror (as Mitsuba's conductor).
+                Bsdf::Mirror(Mirror { reflectance: r })
+            } else {
+                Bsdf::Conductor(Conductor::new(eta, k, r))
+            }
+        }
+        "plastic" | "roughplastic" => {
+            let rough = kind == "roughplastic";
+            let mut keys = vec!["albedo", "specular", "ior", "ext_ior", "nonlinear", "two_sided"];
+            if rough {
+                keys.push("alpha");
+            }
+            cx.only(&present, &keys, &what)?;
+            let (d, tx) = main(&t.albedo, "albedo", Some(0.5))?;
+            texture = tx;
+            let spec = t.specular.as_ref().map(|v| cx.color(v, "specular", Some(1.0))).transpose()?.unwrap_or(Color::ONE);
+            let nonlinear = t.nonlinear.as_ref().is_some_and(|v| *v.get_ref());
+            let eta = eta_of(1.49)?;
+            if rough {
+                let (a, _) = cx.roughness(t, &at)?;
+                Bsdf::RoughPlastic(RoughPlastic::new(a, eta, d, spec, nonlinear))
+            } else {
+                Bsdf::Plastic(Plastic::new(eta, d, spec, nonlinear))
+            }
         }
         "black" => {
-            cx.only(&present, &[], "a black material")?;
+            cx.only(&present, &[], &what)?;
             Bsdf::Black
         }
-        other => return cx.err(t.kind.span(), format!("unknown material type '{other}' (expected lambert, oren_nayar, mirror, dielectric or black)")),
+        other => return cx.err(t.kind.span(), format!("unknown material type '{other}' (expected lambert, oren_nayar, mirror, dielectric, thindielectric, roughdielectric, conductor, roughconductor, plastic, roughplastic or black)")),
     };
-    Ok(Material::new(bsdf, two_sided))
+    let mut m = Material::new(bsdf, two_sided);
+    m.texture = texture;
+    Ok(m)
+}
+
+fn texture(cx: &Ctx, t: &Spanned<TextureT>, base: &Path) -> Result<Texture, SceneError> {
+    let v = t.get_ref();
+    let at = t.span();
+    let present = [
+        ("file", span_of(&v.file)),
+        ("raw", span_of(&v.raw)),
+        ("filter", span_of(&v.filter)),
+        ("wrap", span_of(&v.wrap)),
+        ("color0", span_of(&v.color0)),
+        ("color1", span_of(&v.color1)),
+        ("uv_scale", span_of(&v.uv_scale)),
+        ("uv_offset", span_of(&v.uv_offset)),
+    ];
+    let finite2 = |x: &Option<Spanned<[f32; 2]>>, key: &str, default: Vec2| match x {
+        None => Ok(default),
+        Some(x) if x.get_ref().iter().all(|c| c.is_finite()) => Ok(Vec2::from(*x.get_ref())),
+        Some(x) => cx.err(
+            x.span(),
+            format!("'{key}' must be two finite numbers [u, v]"),
+        ),
+    };
+    // uv ↦ uv · uv_scale + uv_offset.
+    let to_uv = UvTransform::translate(finite2(&v.uv_offset, "uv_offset", Vec2::ZERO)?).after(
+        UvTransform::scale(finite2(&v.uv_scale, "uv_scale", Vec2::ONE)?),
+    );
+    match v.kind.get_ref().as_str() {
+        "bitmap" => {
+            let what = "a bitmap texture";
+            cx.only(
+                &present,
+                &["file", "raw", "filter", "wrap", "uv_scale", "uv_offset"],
+                what,
+            )?;
+            let f = cx.need(&v.file, "file", what, &at)?;
+            let p = base.join(f.get_ref());
+            if !p.is_file() {
+                return cx.err(
+                    f.span(),
+                    format!(
+                        "texture file '{}' not found (looked for {})",
+                        f.get_ref(),
+                        p.display()
+                    ),
+                );
+            }
+            let raw = v.raw.as_ref().is_some_and(|r| *r.get_ref());
+            let bitmap = match Bitmap::load(&p, raw) {
+                Ok(b) => b,
+                Err(e) => {
+                    return cx.err(
+                        f.span(),
+                        format!("cannot load texture {}: {}", p.display(), e.message),
+                    )
+                }
+            };
+            let mut b = BitmapTexture::new(Arc::new(bitmap));
+            if let Some(fl) = &v.filter {
+                b.filter = FilterType::parse(fl.get_ref()).map_or_else(
+                    || {
+                        cx.err(
+                            fl.span(),
+                            format!(
+                                "unknown filter '{}' (expected 'bilinear' or 'nearest')",
+                                fl.get_ref()
+                            ),
+                        )
+                    },
+                    Ok,
+                )?;
+            }
+            if let Some(w) = &v.wrap {
+                b.wrap = WrapMode::parse(w.get_ref()).map_or_else(
+                    || {
+                        cx.err(
+                            w.span(),
+                            format!(
+                                "unknown wrap mode '{}' (expected 'repeat', 'mirror' or 'clamp')",
+                                w.get_ref()
+                            ),
+                        )
+                    },
+                    Ok,
+                )?;
+            }
+            b.to_uv = to_uv;
+            Ok(Texture::Bitmap(b))
+        }
+        "checkerboard" => {
+            cx.only(
+                &present,
+                &["color0", "color1", "uv_scale", "uv_offset"],
+                "a checkerboard texture",
+            )?;
+            let c = |x: &Option<Spanned<ColorT>>, key: &str, d: f32| {
+                x.as_ref()
+                    .map(|x| cx.color(x, key, Some(1.0)))
+                    .transpose()
+                    .map(|c| c.unwrap_or(Color::splat(d)))
+            };
+            Ok(Texture::Checkerboard {
+                color0: c(&v.color0, "color0", 0.4)?,
+                color1: c(&v.color1, "color1", 0.2)?,
+                to_uv,
+            })
+        }
+        other => cx.err(
+            v.kind.span(),
+            format!("unknown texture type '{other}' (expected 'bitmap' or 'checkerboard')"),
+        ),
+    }
+}
+
+fn light_desc(cx: &Ctx, l: &Spanned<LightT>) -> Result<LightDesc, SceneError> {
+    let v = l.get_ref();
+    let at = l.span();
+    let present = [
+        ("position", span_of(&v.position)),
+        ("intensity", span_of(&v.intensity)),
+        ("direction", span_of(&v.direction)),
+        ("irradiance", span_of(&v.irradiance)),
+        ("radiance", span_of(&v.radiance)),
+    ];
+    match v.kind.get_ref().as_str() {
+        "point" => {
+            let what = "a point light";
+            cx.only(&present, &["position", "intensity"], what)?;
+            Ok(LightDesc::Point {
+                position: cx.finite3(cx.need(&v.position, "position", what, &at)?, "position")?,
+                intensity: cx.color(cx.need(&v.intensity, "intensity", what, &at)?, "intensity", None)?,
+            })
+        }
+        "directional" => {
+            let what = "a directional light";
+            cx.only(&present, &["direction", "irradiance"], what)?;
+            let d = cx.need(&v.direction, "direction", what, &at)?;
+            let Some(direction) = cx.finite3(d, "direction")?.try_normalize() else {
+                return cx.err(d.span(), "'direction' must not be zero");
+            };
+            Ok(LightDesc::Directional {
+                direction,
+                irradiance: cx.color(cx.need(&v.irradiance, "irradiance", what, &at)?, "irradiance", None)?,
+            })
+        }
+        kind @ ("constant" | "environment") => {
+            let what = format!("{} {kind} light", if kind == "constant" { "a" } else { "an" });
+            cx.only(&present, &["radiance"], &what)?;
+            Ok(LightDesc::Constant {
+                radiance: cx.color(cx.need(&v.radiance, "radiance", &what, &at)?, "radiance", None)?,
+            })
+        }
+        other => cx.err(
+            v.kind.span(),
+            format!("unknown light type '{other}' (expected point, directional, constant or environment)"),
+        ),
+    }
 }

@@ -21,10 +21,6 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::Arc;
 
-/// Segments of the polygon that stands for a `disk` (its radius is enlarged so that the area,
-/// and so an emitter's power, is exact).
-const DISK_SEGMENTS: u32 = 256;
-
 struct Builder<'a> {
     doc: &'a Document,
     ids: Ids<'a>,
@@ -860,17 +856,12 @@ fn cube(m: Mat4, flip: bool) -> TriangleMesh {
 
 /// Mitsuba's `disk`: the unit disk in the xy plane, facing +z, as a polygon of equal area.
 fn disk(m: Mat4, flip: bool) -> TriangleMesh {
-    let n = DISK_SEGMENTS;
-    let step = std::f32::consts::TAU / n as f32;
-    // Area of the regular n-gon of circumradius R: (n/2)·R²·sin(2π/n) = π.
-    let r = (std::f32::consts::TAU / (n as f32 * step.sin())).sqrt();
-    let mut v = vec![[0.0, 0.0, 0.0]];
-    for i in 0..n {
-        let a = i as f32 * step;
-        v.push([r * a.cos(), r * a.sin(), 0.0]);
+    let mut disk = TriangleMesh::unit_disk();
+    disk.transform(&m);
+    if flip {
+        flip_mesh(&mut disk);
     }
-    let idx: Vec<[u32; 3]> = (0..n).map(|i| [0, 1 + i, 1 + (i + 1) % n]).collect();
-    mesh(&v, &idx, m, flip)
+    disk
 }
 
 /// An index of refraction: a number or one of Mitsuba's named materials.
