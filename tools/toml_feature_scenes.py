@@ -256,7 +256,7 @@ floor = compose((5, 5, 5), rot("x", -90), (0, 0, 0))
 textures = f"""# TOML twin of tests/data/mitsuba/features/textures.xml (written by
 # tools/toml_feature_scenes.py): a checkerboard (uv_scale) on a floor given with `uvs`, an
 # sRGB PNG (nearest) on an OBJ quad, a linear EXR (mirror wrap, uv_scale) on a sphere, a
-# textured plastic on a PLY pyramid (flat) and a textured rough metal; compared with the
+# textured plastic on a smooth-shaded PLY pyramid and a textured rough metal; compared with the
 # same Mitsuba reference (tests/data/refs/textures.exr) in tests/toml_features.rs.
 # quad.obj and pyramid.ply here are the features' files with their to_world applied.
 
@@ -347,6 +347,7 @@ radius = 0.8
 type = "mesh"
 material = "plastic"
 file = "pyramid.ply"
+smooth = true
 
 [[shape]]
 type = "sphere"
@@ -377,7 +378,7 @@ with open(f"{OUT}/quad.obj", "w") as f:
         f.write("v " + " ".join(fmt(c) for c in m(p)) + "\n")
     f.write("vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1 4/4/1\n")
 
-# pyramid.ply (binary) as ASCII: scale 0.6, translate (−0.6, 0, 1).
+# pyramid.ply (binary) as ASCII: scale 0.6, translate (−0.6, 0.02, 1).
 d = open("tests/data/mitsuba/features/pyramid.ply", "rb").read()
 body = d[d.index(b"end_header\n") + len(b"end_header\n"):]
 verts = [struct.unpack_from("<5f", body, 20 * k) for k in range(5)]
@@ -386,7 +387,7 @@ for _ in range(6):
     n = body[off]
     faces.append(struct.unpack_from("<%dI" % n, body, off + 1))
     off += 1 + 4 * n
-m = compose((0.6, 0.6, 0.6), IDENT, (-0.6, 0, 1))
+m = compose((0.6, 0.6, 0.6), IDENT, (-0.6, 0.02, 1))
 with open(f"{OUT}/pyramid.ply", "w") as f:
     f.write("ply\nformat ascii 1.0\ncomment tests/data/mitsuba/features/pyramid.ply moved as "
             "textures.xml moves it\nelement vertex 5\nproperty float x\nproperty float y\n"
