@@ -113,11 +113,12 @@ pub fn load_scene_with(path: &Path, opts: &LoadOptions) -> Result<SceneDesc, Err
     }
 }
 
-/// Bytes of memory a render needs beyond the scene: the film (f64 sums, sums of squares
-/// and counts: 56 bytes a pixel) and the image written from it (12 bytes a pixel).
+/// Bytes of memory a render needs beyond the scene: the film (fixed-point sums and sums of
+/// squares, counts) and the f32 RGB image written from it.
 pub fn render_memory(s: &RenderSettings) -> u64 {
     let (_, _, w, h) = s.window();
-    w as u64 * h as u64 * (56 + 12)
+    let per_pixel = 2 * std::mem::size_of::<[i128; 3]>() + std::mem::size_of::<u32>() + 12;
+    w as u64 * h as u64 * per_pixel as u64
 }
 
 /// Memory the system can still give, from /proc/meminfo (None where that is unknown).
