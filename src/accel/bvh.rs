@@ -46,11 +46,23 @@ struct BuildRef {
     index: u32,
 }
 
+/// Subtrees with more primitives than this are built in parallel (rayon::join); below it the
+/// recursion stays on one thread and writes into one node array.
+const PARALLEL_MIN: usize = 1 << 14;
+
+/// Per-axis bins of one node: primitive counts, primitive bounds and centroid bounds.
+struct Bins {
+    count: [[u32; BINS]; 3],
+    bounds: [[Aabb; BINS]; 3],
+    centroids: [[Aabb; BINS]; 3],
+}
+
 impl Bvh {
     /// Builds over the given primitive bounds.
     pub fn build(bounds: &[Aabb]) -> Bvh {
+        use rayon::prelude::*;
         let mut refs: Vec<BuildRef> = bounds
-            .iter()
+            .par_iter()
             .enumerate()
             .map(|(i, b)| BuildRef {
                 bounds: *b,
@@ -58,24 +70,25 @@ impl Bvh {
                 index: i as u32,
             })
             .collect();
-        let mut bvh = Bvh {
-            nodes: Vec::with_capacity(bounds.len().max(1) * 2),
-            order: Vec::new(),
-        };
         if refs.is_empty() {
-            bvh.nodes.push(BvhNode {
-                min: [f32::INFINITY; 3],
-                offset: 0,
-                max: [f32::NEG_INFINITY; 3],
-                count: 0,
-                axis: 0,
-            });
-            // An empty leaf: mark with count 0 but no children; traversal checks `order`.
-            return bvh;
+            return Bvh {
+                nodes: vec![BvhNode {
+                    min: [f32::INFINITY; 3],
+                    offset: 0,
+                    max: [f32::NEG_INFINITY; 3],
+                    count: 0,
+                    axis: 0,
+                }],
+                // An empty leaf: traversal checks `order`.
+                order: Vec::new(),
+            };
         }
-        bvh.build_node(&mut refs, 0, 0);
-        bvh.order = refs.iter().map(|r| r.index).collect();
-        bvh
+        let (b, cb) = bounds_of(&refs);
+        let nodes = build_subtree(&mut refs, 0, 0, b, cb);
+        Bvh {
+            nodes,
+            order: refs.iter().map(|r| r.index).collect(),
+        }
     }
 
     pub fn bounds(&self) -> Aabb {
@@ -84,133 +97,6 @@ impl Bvh {
             min: Vec3A::from_array(n.min),
             max: Vec3A::from_array(n.max),
         }
-    }
-
-    fn push_leaf(&mut self, b: &Aabb, first: usize, count: usize) {
-        self.nodes.push(BvhNode {
-            min: b.min.to_array(),
-            offset: first as u32,
-            max: b.max.to_array(),
-            count: count as u16,
-            axis: 0,
-        });
-    }
-
-    fn build_node(&mut self, refs: &mut [BuildRef], first: usize, depth: usize) -> usize {
-        let node_index = self.nodes.len();
-        let mut bounds = Aabb::EMPTY;
-        let mut cbounds = Aabb::EMPTY;
-        for r in refs.iter() {
-            bounds.grow(&r.bounds);
-            cbounds.grow_point(r.centroid);
-        }
-        let n = refs.len();
-        if n == 1 {
-            self.push_leaf(&bounds, first, n);
-            return node_index;
-        }
-        let cext = cbounds.extent();
-        if depth >= MAX_DEPTH - 32 {
-            // Degenerate input (the SAH keeps peeling off few primitives): split at the
-            // object median along the widest centroid axis.
-            let axis = if cext.x >= cext.y && cext.x >= cext.z {
-                0
-            } else if cext.y >= cext.z {
-                1
-            } else {
-                2
-            };
-            let mid = n / 2;
-            refs.select_nth_unstable_by(mid, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
-            return self.push_interior(refs, first, depth, &bounds, axis, mid);
-        }
-        // Find the cheapest binned split over all three axes.
-        let mut best: Option<(usize, usize, f32)> = None; // (axis, bin, cost)
-        for axis in 0..3 {
-            if cext[axis] <= 0.0 {
-                continue;
-            }
-            let mut counts = [0usize; BINS];
-            let mut bb = [Aabb::EMPTY; BINS];
-            let k = BINS as f32 * (1.0 - 1e-6) / cext[axis];
-            for r in refs.iter() {
-                let b = (((r.centroid[axis] - cbounds.min[axis]) * k) as usize).min(BINS - 1);
-                counts[b] += 1;
-                bb[b].grow(&r.bounds);
-            }
-            // Sweep from the right to get the right-hand areas, then from the left.
-            let mut right_area = [0.0f32; BINS];
-            let mut right_count = [0usize; BINS];
-            let mut acc = Aabb::EMPTY;
-            let mut cnt = 0;
-            for i in (1..BINS).rev() {
-                acc.grow(&bb[i]);
-                cnt += counts[i];
-                right_area[i] = acc.surface_area();
-                right_count[i] = cnt;
-            }
-            let mut acc = Aabb::EMPTY;
-            let mut cnt = 0;
-            for i in 0..BINS - 1 {
-                acc.grow(&bb[i]);
-                cnt += counts[i];
-                if cnt == 0 || right_count[i + 1] == 0 {
-                    continue;
-                }
-                let cost =
-                    cnt as f32 * acc.surface_area() + right_count[i + 1] as f32 * right_area[i + 1];
-                if best.is_none_or(|(_, _, c)| cost < c) {
-                    best = Some((axis, i, cost));
-                }
-            }
-        }
-        let area = bounds.surface_area().max(f32::MIN_POSITIVE);
-        let leaf_cost = n as f32;
-        let split = best.map(|(axis, bin, cost)| (axis, bin, TRAVERSAL_COST + cost / area));
-        let (axis, mid) = match split {
-            Some((axis, bin, cost)) if cost < leaf_cost || n > MAX_LEAF => {
-                let k = BINS as f32 * (1.0 - 1e-6) / cext[axis];
-                let lo = cbounds.min[axis];
-                let mid = partition(refs, |r| {
-                    (((r.centroid[axis] - lo) * k) as usize).min(BINS - 1) <= bin
-                });
-                (axis, mid)
-            }
-            None if n > MAX_LEAF => {
-                // All centroids coincide: split the list in half so leaves stay small.
-                (0, n / 2)
-            }
-            _ => {
-                self.push_leaf(&bounds, first, n);
-                return node_index;
-            }
-        };
-        self.push_interior(refs, first, depth, &bounds, axis, mid)
-    }
-
-    /// Emits an inner node over `refs`, split at `mid` along `axis`, and builds its children.
-    fn push_interior(
-        &mut self,
-        refs: &mut [BuildRef],
-        first: usize,
-        depth: usize,
-        bounds: &Aabb,
-        axis: usize,
-        mid: usize,
-    ) -> usize {
-        let node_index = self.nodes.len();
-        self.nodes.push(BvhNode {
-            min: bounds.min.to_array(),
-            offset: 0,
-            max: bounds.max.to_array(),
-            count: 0,
-            axis: axis as u16,
-        });
-        let (left, right) = refs.split_at_mut(mid);
-        self.build_node(left, first, depth + 1);
-        let second = self.build_node(right, first + mid, depth + 1);
-        self.nodes[node_index].offset = second as u32;
-        node_index
     }
 
     pub fn depth(&self) -> usize {
@@ -224,6 +110,207 @@ impl Bvh {
         }
         rec(self, 0)
     }
+}
+
+/// Bounds of the primitives and of their centroids.
+fn bounds_of(refs: &[BuildRef]) -> (Aabb, Aabb) {
+    let mut b = Aabb::EMPTY;
+    let mut cb = Aabb::EMPTY;
+    for r in refs {
+        b.grow(&r.bounds);
+        cb.grow_point(r.centroid);
+    }
+    (b, cb)
+}
+
+/// Builds the subtree over `refs` (the primitives `first..first + refs.len()` of the final
+/// order) into a node array of its own, whose inner nodes' offsets count from its start.
+fn build_subtree(
+    refs: &mut [BuildRef],
+    first: usize,
+    depth: usize,
+    bounds: Aabb,
+    cbounds: Aabb,
+) -> Vec<BvhNode> {
+    let mut nodes = Vec::with_capacity(2 * refs.len());
+    build_node(&mut nodes, refs, first, depth, bounds, cbounds);
+    nodes
+}
+
+fn leaf(b: &Aabb, first: usize, count: usize) -> BvhNode {
+    BvhNode {
+        min: b.min.to_array(),
+        offset: first as u32,
+        max: b.max.to_array(),
+        count: count as u16,
+        axis: 0,
+    }
+}
+
+/// Appends the subtree over `refs` to `nodes`. `bounds` and `cbounds` are the bounds of the
+/// primitives and of their centroids (the parent's bins give them without another pass).
+fn build_node(
+    nodes: &mut Vec<BvhNode>,
+    refs: &mut [BuildRef],
+    first: usize,
+    depth: usize,
+    bounds: Aabb,
+    cbounds: Aabb,
+) {
+    let n = refs.len();
+    if n == 1 {
+        nodes.push(leaf(&bounds, first, n));
+        return;
+    }
+    let cext = cbounds.extent();
+    let widest = if cext.x >= cext.y && cext.x >= cext.z {
+        0
+    } else if cext.y >= cext.z {
+        1
+    } else {
+        2
+    };
+    if depth >= MAX_DEPTH - 32 {
+        // Degenerate input (the SAH keeps peeling off few primitives): split at the object
+        // median along the widest centroid axis.
+        let mid = n / 2;
+        refs.select_nth_unstable_by(mid, |a, b| {
+            a.centroid[widest].total_cmp(&b.centroid[widest])
+        });
+        return push_interior(nodes, refs, first, depth, &bounds, widest, mid, None);
+    }
+    // Bin the centroids along all three axes in one pass over the primitives.
+    let scale = Vec3A::select(
+        cext.cmpgt(Vec3A::ZERO),
+        Vec3A::splat(BINS as f32 * (1.0 - 1e-6)) / cext,
+        Vec3A::ZERO,
+    );
+    let bin_of = |c: Vec3A| {
+        let b = ((c - cbounds.min) * scale)
+            .as_uvec3()
+            .min(glam::UVec3::splat(BINS as u32 - 1));
+        [b.x as usize, b.y as usize, b.z as usize]
+    };
+    let mut bins = Bins {
+        count: [[0; BINS]; 3],
+        bounds: [[Aabb::EMPTY; BINS]; 3],
+        centroids: [[Aabb::EMPTY; BINS]; 3],
+    };
+    for r in refs.iter() {
+        let b = bin_of(r.centroid);
+        for axis in 0..3 {
+            bins.count[axis][b[axis]] += 1;
+            bins.bounds[axis][b[axis]].grow(&r.bounds);
+            bins.centroids[axis][b[axis]].grow_point(r.centroid);
+        }
+    }
+    // Sweep each axis for the cheapest split (right-hand areas first, then from the left).
+    let mut best: Option<(usize, usize, f32)> = None; // (axis, bin, cost)
+    for axis in 0..3 {
+        if cext[axis] <= 0.0 {
+            continue;
+        }
+        let mut right_area = [0.0f32; BINS];
+        let mut right_count = [0u32; BINS];
+        let mut acc = Aabb::EMPTY;
+        let mut cnt = 0;
+        for i in (1..BINS).rev() {
+            acc.grow(&bins.bounds[axis][i]);
+            cnt += bins.count[axis][i];
+            right_area[i] = acc.surface_area();
+            right_count[i] = cnt;
+        }
+        let mut acc = Aabb::EMPTY;
+        let mut cnt = 0;
+        for i in 0..BINS - 1 {
+            acc.grow(&bins.bounds[axis][i]);
+            cnt += bins.count[axis][i];
+            if cnt == 0 || right_count[i + 1] == 0 {
+                continue;
+            }
+            let cost =
+                cnt as f32 * acc.surface_area() + right_count[i + 1] as f32 * right_area[i + 1];
+            if best.is_none_or(|(_, _, c)| cost < c) {
+                best = Some((axis, i, cost));
+            }
+        }
+    }
+    let area = bounds.surface_area().max(f32::MIN_POSITIVE);
+    let leaf_cost = n as f32;
+    match best.map(|(axis, bin, cost)| (axis, bin, TRAVERSAL_COST + cost / area)) {
+        Some((axis, bin, cost)) if cost < leaf_cost || n > MAX_LEAF => {
+            let mid = partition(refs, |r| bin_of(r.centroid)[axis] <= bin);
+            // The children's bounds are the unions of their bins'.
+            let union = |range: std::ops::Range<usize>| {
+                let (mut b, mut c) = (Aabb::EMPTY, Aabb::EMPTY);
+                for i in range {
+                    b.grow(&bins.bounds[axis][i]);
+                    c.grow(&bins.centroids[axis][i]);
+                }
+                (b, c)
+            };
+            let left_count: u32 = bins.count[axis][..=bin].iter().sum();
+            // (The partition falls back to a median split only if one side were empty, which
+            // the sweep excludes; then the bins would not describe the children.)
+            let children =
+                (mid == left_count as usize).then(|| (union(0..bin + 1), union(bin + 1..BINS)));
+            push_interior(nodes, refs, first, depth, &bounds, axis, mid, children);
+        }
+        // All centroids coincide: split the list in half so leaves stay small.
+        None if n > MAX_LEAF => push_interior(nodes, refs, first, depth, &bounds, 0, n / 2, None),
+        _ => nodes.push(leaf(&bounds, first, n)),
+    }
+}
+
+/// Emits an inner node over `refs`, split at `mid` along `axis`, and builds its children
+/// (in parallel when they are large). `children` gives their bounds and centroid bounds
+/// when the split came from the bins.
+#[allow(clippy::too_many_arguments)]
+fn push_interior(
+    nodes: &mut Vec<BvhNode>,
+    refs: &mut [BuildRef],
+    first: usize,
+    depth: usize,
+    bounds: &Aabb,
+    axis: usize,
+    mid: usize,
+    children: Option<((Aabb, Aabb), (Aabb, Aabb))>,
+) {
+    let node_index = nodes.len();
+    nodes.push(BvhNode {
+        min: bounds.min.to_array(),
+        offset: 0,
+        max: bounds.max.to_array(),
+        count: 0,
+        axis: axis as u16,
+    });
+    let (left, right) = refs.split_at_mut(mid);
+    let ((lb, lc), (rb, rc)) = children.unwrap_or_else(|| (bounds_of(left), bounds_of(right)));
+    if left.len().min(right.len()) >= PARALLEL_MIN {
+        let (l, r) = rayon::join(
+            || build_subtree(left, first, depth + 1, lb, lc),
+            || build_subtree(right, first + mid, depth + 1, rb, rc),
+        );
+        append(nodes, &l);
+        nodes[node_index].offset = nodes.len() as u32;
+        append(nodes, &r);
+    } else {
+        build_node(nodes, left, first, depth + 1, lb, lc);
+        nodes[node_index].offset = nodes.len() as u32;
+        build_node(nodes, right, first + mid, depth + 1, rb, rc);
+    }
+}
+
+/// Appends a subtree built on its own, moving its inner nodes' child offsets to its place.
+fn append(nodes: &mut Vec<BvhNode>, sub: &[BvhNode]) {
+    let base = nodes.len() as u32;
+    nodes.extend(sub.iter().map(|n| {
+        let mut n = *n;
+        if n.count == 0 {
+            n.offset += base;
+        }
+        n
+    }));
 }
 
 /// Stable-enough in-place partition; returns the number of elements satisfying `pred`,

@@ -191,6 +191,16 @@ impl Scene {
             })
     }
 
+    /// Bytes held by the geometry the integrators trace: primitives, BVH nodes, vertex
+    /// normals and texture coordinates (not materials, textures or lights).
+    pub fn memory_bytes(&self) -> usize {
+        use std::mem::size_of;
+        self.prims.len() * size_of::<Primitive>()
+            + self.bvh.nodes.len() * size_of::<crate::accel::wide::Node4>()
+            + self.normals.len() * size_of::<[Vec3A; 3]>()
+            + self.uvs.len() * size_of::<[Vec2; 3]>()
+    }
+
     /// The material at a hit, its texture (if any) evaluated there.
     #[inline]
     pub fn material_at(&self, si: &Interaction) -> Material {

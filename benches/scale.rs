@@ -1,0 +1,63 @@
+//! Scale: the same view of the bunny at about 10 k, 100 k, 1 M and 10 M triangles (each
+//! triangle of the 3674-triangle bunny split into k² coplanar ones, generated here and never
+//! stored), with the BVH build rate, the memory a triangle costs and the render rate.
+//!
+//!     cargo bench --bench scale            (all four sizes; about a minute and 2 GB at 10 M)
+//!     cargo bench --bench scale -- 1000000 (sizes up to this count)
+
+#[path = "common.rs"]
+mod common;
+
+use mcrt::scene::desc::FileSettings;
+use mcrt::scene::Scene;
+use std::time::Instant;
+
+fn main() {
+    let max: u64 = std::env::args()
+        .skip(1)
+        .find_map(|a| a.parse().ok())
+        .unwrap_or(u64::MAX);
+    let base = common::bunny();
+    println!(
+        "| triangles | build (s) | build (M tri/s) | bytes/triangle | samples/s (M) | vs 10 k |"
+    );
+    println!("|---|---|---|---|---|---|");
+    let mut first_rate = None;
+    for k in [2u32, 5, 16, 52] {
+        let n = base.indices.len() as u64 * (k * k) as u64;
+        if n > max {
+            break;
+        }
+        let mesh = common::subdivide(&base, k);
+        let desc = common::bunny_scene(mesh);
+        let t = Instant::now();
+        let scene = Scene::build(desc.clone());
+        let build = t.elapsed().as_secs_f64();
+        let bytes = scene.memory_bytes() as f64 / scene.prims.len() as f64;
+        let fs = FileSettings::default();
+        let s = mcrt::resolve_settings(
+            &fs,
+            &FileSettings {
+                width: Some(256),
+                height: Some(256),
+                spp: Some(8),
+                ..Default::default()
+            },
+            None,
+        )
+        .unwrap();
+        let (_, stats) = mcrt::render::render(&scene, &s, &|_| {}).unwrap();
+        let rate = stats.samples as f64 / stats.elapsed.as_secs_f64();
+        let first = *first_rate.get_or_insert(rate);
+        println!(
+            "| {} | {:.2} | {:.2} | {:.0} | {:.2} | {:.2}× slower |",
+            scene.prims.len(),
+            build,
+            scene.prims.len() as f64 / build / 1e6,
+            bytes,
+            rate / 1e6,
+            first / rate
+        );
+        drop(desc);
+    }
+}
