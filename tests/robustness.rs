@@ -80,7 +80,10 @@ fn same_image_at_every_scale(file: &str, camera: Option<&str>) {
             }
         }
         eprintln!("{file} at scale {scale}: worst block z {worst:.2}, image means {sum_a:.4} / {sum_b:.4}");
-        assert!(worst < 5.0, "{file} at scale {scale}: a block is off by {worst:.2} sigma");
+        assert!(
+            worst < 5.0,
+            "{file} at scale {scale}: a block is off by {worst:.2} sigma"
+        );
         assert!(sum_b > 0.0);
     }
 }
