@@ -150,6 +150,20 @@ impl Camera {
         Ray::new(self.eye, (p - self.eye).normalize())
     }
 
+    /// Film coordinates (s, t) in [0,1]² (s right, t down) where the ray from the eye to
+    /// `p` crosses the image plane; None for points behind the eye. The plane's bilinear
+    /// twist is ignored (it is zero for every camera but a skewed pinhole).
+    pub fn project(&self, p: Vec3A) -> Option<(f32, f32)> {
+        let d = p - self.eye;
+        // eye + λ·d = tl + s·right + t·down
+        let m = glam::Mat3::from_cols(self.right.into(), self.down.into(), (-d).into());
+        if m.determinant().abs() < 1e-20 {
+            return None;
+        }
+        let x = m.inverse() * glam::Vec3::from(self.eye - self.tl);
+        (x.z > 0.0).then_some((x.x, x.y))
+    }
+
     pub fn eye(&self) -> Vec3A {
         self.eye
     }

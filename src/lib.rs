@@ -15,6 +15,7 @@ pub mod integrator;
 pub mod light;
 pub mod material;
 pub mod parts;
+pub mod photon;
 pub mod render;
 pub mod sampler;
 pub mod scene;
@@ -209,6 +210,7 @@ pub fn resolve_settings(
             rr,
             hide_emitters: over.hide_emitters.or(file.hide_emitters).unwrap_or(false),
             specular_chain: over.specular_chain.or(file.specular_chain).unwrap_or(true),
+            photon: Default::default(),
         },
         // A crop window from the file belongs to the file's image size.
         crop,

@@ -35,6 +35,95 @@ enum Command {
     /// sqrt(mean((A−B)²)), relMSE = mean((A−B)²/(B²+0.01)), PSNR = 10·log10(1/MSE) dB (peak
     /// 1).
     Compare(CompareArgs),
+    /// Trace the photon maps of the `photon` integrator and draw the stored photons over a
+    /// dimmed direct-light render: global photons blue, caustic photons orange.
+    Photons(PhotonsArgs),
+}
+
+/// Settings of the photon-mapping integrators.
+#[derive(clap::Args, Clone)]
+struct PhotonArgs {
+    /// photon: photons emitted for the global map.
+    #[arg(long, value_name = "N", default_value_t = 200_000)]
+    photons: u64,
+    /// photon: photons emitted for the caustic map (those that reach a diffuse surface by
+    /// mirrors and glass only are kept).
+    #[arg(long, value_name = "N", default_value_t = 1_000_000)]
+    caustic_photons: u64,
+    /// photon: photons in each radiance estimate (k nearest, cone filter).
+    #[arg(long, value_name = "K", default_value_t = 64)]
+    gather_photons: u32,
+    /// photon: final-gather rays per camera sample (0: the global map seen directly).
+    #[arg(long, value_name = "N", default_value_t = 8)]
+    final_gather: u32,
+    /// sppm: iterations (camera pass plus photon pass each).
+    #[arg(long, value_name = "N", default_value_t = 64)]
+    iterations: u32,
+    /// sppm: photons emitted per iteration.
+    #[arg(long, value_name = "N", default_value_t = 100_000)]
+    photons_per_iteration: u64,
+    /// sppm: initial search radius in scene units (default: 1/200 of the scene's diagonal).
+    #[arg(long, value_name = "R")]
+    initial_radius: Option<f32>,
+}
+
+impl PhotonArgs {
+    fn params(&self) -> Result<mcrt::integrator::PhotonParams, Error> {
+        if self.iterations == 0 || self.photons_per_iteration == 0 || self.gather_photons == 0 {
+            return Err(Error::Usage(
+                "--iterations, --photons-per-iteration and --gather-photons must be at least 1"
+                    .into(),
+            ));
+        }
+        if let Some(r) = self.initial_radius {
+            if !(r > 0.0 && r.is_finite()) {
+                return Err(Error::Usage(format!(
+                    "--initial-radius must be positive, got {r}"
+                )));
+            }
+        }
+        Ok(mcrt::integrator::PhotonParams {
+            photons: self.photons,
+            caustic_photons: self.caustic_photons,
+            gather_photons: self.gather_photons,
+            final_gather: self.final_gather,
+            iterations: self.iterations,
+            photons_per_iteration: self.photons_per_iteration,
+            initial_radius: self.initial_radius,
+        })
+    }
+}
+
+#[derive(clap::Args)]
+struct PhotonsArgs {
+    /// Scene file (.toml or Mitsuba .xml).
+    scene: PathBuf,
+    /// Output image (.png or .exr).
+    #[arg(short, long, default_value = "photons.png")]
+    output: PathBuf,
+    /// Set a parameter of a Mitsuba XML scene.
+    #[arg(short = 'D', value_name = "NAME=VALUE")]
+    define: Vec<String>,
+    /// Image width in pixels.
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height in pixels.
+    #[arg(long)]
+    height: Option<u32>,
+    /// Samples per pixel of the background render.
+    #[arg(long, default_value_t = 4)]
+    spp: u32,
+    /// Seed of the photon and camera streams.
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Camera, by name.
+    #[arg(long)]
+    camera: Option<String>,
+    /// Worker threads (default: one per core).
+    #[arg(long)]
+    threads: Option<usize>,
+    #[command(flatten)]
+    photon: PhotonArgs,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -43,6 +132,10 @@ enum IntegratorArg {
     Path,
     /// Emission plus one bounce of direct light, through mirrors and glass.
     Direct,
+    /// Photon mapping (Jensen): shadow rays, caustic map, final gathering into a global map.
+    Photon,
+    /// Stochastic progressive photon mapping: converges as --iterations grows.
+    Sppm,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -117,6 +210,8 @@ struct RenderArgs {
     /// No progress bar and no summary line.
     #[arg(short, long)]
     quiet: bool,
+    #[command(flatten)]
+    photon: PhotonArgs,
 }
 
 #[derive(clap::Args)]
@@ -183,6 +278,7 @@ fn main() {
         Command::Render(args) => render(args),
         Command::Merge(args) => merge(args),
         Command::Compare(args) => compare(args),
+        Command::Photons(args) => photons(args),
     };
     if let Err(e) = result {
         eprintln!("error: {e}");
@@ -238,6 +334,8 @@ fn render(a: RenderArgs) -> Result<(), Error> {
         integrator: a.integrator.map(|i| match i {
             IntegratorArg::Path => IntegratorKind::Path,
             IntegratorArg::Direct => IntegratorKind::Direct,
+            IntegratorArg::Photon => IntegratorKind::Photon,
+            IntegratorArg::Sppm => IntegratorKind::Sppm,
         }),
         max_depth,
         shadow_rays: a.shadow_rays,
@@ -254,7 +352,8 @@ fn render(a: RenderArgs) -> Result<(), Error> {
     if a.max_depth == Some(-1) {
         file_settings.max_depth = None;
     }
-    let settings = mcrt::resolve_settings(&file_settings, &over, a.threads)?;
+    let mut settings = mcrt::resolve_settings(&file_settings, &over, a.threads)?;
+    settings.params.photon = a.photon.params()?;
     mcrt::check_memory(&settings).map_err(|e| match (a.width, a.height) {
         // The size came from the scene file: say so.
         (None, None) => Error::Scene(SceneError::new(&a.scene, None, e.to_string())),
@@ -284,8 +383,11 @@ fn render(a: RenderArgs) -> Result<(), Error> {
     let load_time = t_load.elapsed();
 
     let (_, _, fw, fh) = settings.window();
-    let total =
-        fw as u64 * fh as u64 * a.pass.map_or(settings.spp, |p| p.share(settings.spp).1) as u64;
+    let passes = match settings.params.kind {
+        IntegratorKind::Sppm => settings.params.photon.iterations,
+        _ => a.pass.map_or(settings.spp, |p| p.share(settings.spp).1),
+    };
+    let total = fw as u64 * fh as u64 * passes as u64;
     let show = !a.quiet && std::io::stderr().is_terminal();
     let bar = if show {
         let b = ProgressBar::new(total);
@@ -297,8 +399,16 @@ fn render(a: RenderArgs) -> Result<(), Error> {
     } else {
         ProgressBar::hidden()
     };
-    let pass = a.pass.unwrap_or(Pass { k: 1, n: 1 });
-    let (film, stats) = parts::render_pass(&scene, &settings, pass, &|n| bar.inc(n))?;
+    let (film, stats) = match settings.params.kind {
+        // Photon maps are traced for the whole image: no sample passes.
+        IntegratorKind::Photon | IntegratorKind::Sppm => {
+            mcrt::render::render(&scene, &settings, &|n| bar.inc(n))?
+        }
+        _ => {
+            let pass = a.pass.unwrap_or(Pass { k: 1, n: 1 });
+            parts::render_pass(&scene, &settings, pass, &|n| bar.inc(n))?
+        }
+    };
     bar.finish_and_clear();
 
     match a.pass {
@@ -314,11 +424,12 @@ fn render(a: RenderArgs) -> Result<(), Error> {
         let secs = stats.elapsed.as_secs_f64().max(1e-9);
         let rays = stats.rays.rays + stats.rays.shadow_rays;
         eprintln!(
-            "{}: {}x{} at {} spp{} ({}, {} primitives, {} lights, loaded in {:.2} s) in {:.2} s: {:.2} M samples/s, {:.2} M rays/s ({:.2} M shadow rays/s)",
+            "{}: {}x{} at {} {}{} ({}, {} primitives, {} lights, loaded in {:.2} s) in {:.2} s: {:.2} M samples/s, {:.2} M rays/s ({:.2} M shadow rays/s)",
             output.display(),
             fw,
             fh,
-            settings.spp,
+            if settings.params.kind == IntegratorKind::Sppm { settings.params.photon.iterations } else { settings.spp },
+            if settings.params.kind == IntegratorKind::Sppm { "iterations" } else { "spp" },
             match a.pass {
                 Some(p) => {
                     let (first, count) = p.share(settings.spp);
@@ -335,6 +446,15 @@ fn render(a: RenderArgs) -> Result<(), Error> {
             rays as f64 / secs / 1e6,
             stats.rays.shadow_rays as f64 / secs / 1e6,
         );
+        if stats.photons_stored > 0 {
+            eprintln!(
+                "photon maps: {} photons stored ({:.1} MB, {} bytes each), traced and built in {:.2} s",
+                stats.photons_stored,
+                stats.photon_bytes as f64 / 1e6,
+                std::mem::size_of::<mcrt::photon::Photon>(),
+                stats.photon_time.as_secs_f64()
+            );
+        }
         if stats.dropped > 0 {
             let (x, y) = stats.first_dropped.unwrap_or_default();
             eprintln!("warning: {} samples were NaN or infinite and were dropped (first at pixel {x}, {y})", stats.dropped);
@@ -404,5 +524,54 @@ fn compare(a: CompareArgs) -> Result<(), Error> {
             d.display()
         );
     }
+    Ok(())
+}
+
+fn photons(a: PhotonsArgs) -> Result<(), Error> {
+    check_output_path(&a.output)?;
+    if a.threads == Some(0) {
+        return Err(Error::Usage("--threads must be at least 1".into()));
+    }
+    let mut defines = Vec::new();
+    for d in &a.define {
+        let Some((k, v)) = d.split_once('=') else {
+            return Err(Error::Usage(format!("-D expects NAME=VALUE, got '{d}'")));
+        };
+        defines.push((k.to_string(), v.to_string()));
+    }
+    let load = mcrt::LoadOptions {
+        defines,
+        lenient: false,
+    };
+    let desc = mcrt::load_scene_with(&a.scene, &load)?;
+    let over = FileSettings {
+        width: a.width,
+        height: a.height,
+        spp: Some(a.spp),
+        seed: a.seed,
+        camera: a.camera.clone(),
+        ..Default::default()
+    };
+    let mut settings = mcrt::resolve_settings(&desc.settings, &over, a.threads)?;
+    settings.params.photon = a.photon.params()?;
+    mcrt::check_memory(&settings)?;
+    let scene = Scene::build(desc);
+    let s = &settings;
+    let maps = mcrt::render::in_pool(s, || {
+        mcrt::photon::PhotonMaps::build(&scene, &s.params, s.seed)
+    })?;
+    let img = mcrt::render::in_pool(s, || {
+        mcrt::photon::visualize::draw_photons(&scene, s, &maps)
+    })??;
+    write_image(&a.output, &img, &WriteOptions::default())?;
+    eprintln!(
+        "{}: {} global photons (blue), {} caustic photons (orange), {} shadow-test photons; {:.1} MB, traced and built in {:.2} s",
+        a.output.display(),
+        maps.global.len(),
+        maps.caustic.len(),
+        maps.shadow.len(),
+        maps.memory_bytes() as f64 / 1e6,
+        maps.build_time.as_secs_f64()
+    );
     Ok(())
 }

@@ -2,9 +2,12 @@
 //! sample with its own random stream, so the image is the same on any number of threads.
 
 use crate::film::{Film, PixelSums};
-use crate::integrator::{self, IntegratorParams, RayStats};
+use crate::geometry::Ray;
+use crate::integrator::{self, IntegratorKind, IntegratorParams, RayStats};
+use crate::photon::PhotonMaps;
 use crate::sampler::{Sampler, SamplerKind};
 use crate::scene::Scene;
+use crate::Color;
 use rayon::prelude::*;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
@@ -46,6 +49,10 @@ pub struct RenderStats {
     /// Samples that came out NaN or infinite and were dropped, and the first such pixel.
     pub dropped: u64,
     pub first_dropped: Option<(u32, u32)>,
+    /// `photon`: photons stored in the maps, their memory and the time to trace and build.
+    pub photons_stored: u64,
+    pub photon_bytes: u64,
+    pub photon_time: Duration,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -58,6 +65,22 @@ pub enum RenderError {
     Threads(String),
 }
 
+/// The camera the settings name, built for the image size.
+pub fn camera_for(scene: &Scene, s: &RenderSettings) -> Result<crate::camera::Camera, RenderError> {
+    let cam_desc = match (&s.camera, scene.camera(s.camera.as_deref())) {
+        (_, Some(c)) => c,
+        (Some(name), None) => {
+            let names: Vec<&str> = scene.cameras.iter().map(|(n, _)| n.as_str()).collect();
+            return Err(RenderError::NoCamera(name.clone(), names.join(", ")));
+        }
+        (None, None) => return Err(RenderError::NoCameras),
+    };
+    Ok(cam_desc.build(s.width, s.height))
+}
+
+/// Radiance along a camera ray: an integrator with whatever it has built (photon maps).
+pub type LiFn<'a> = dyn Fn(Ray, &mut Sampler, &mut RayStats) -> Color + Sync + 'a;
+
 /// Renders samples [first, first + count) of every pixel into `film`.
 pub fn render_samples(
     scene: &Scene,
@@ -67,15 +90,23 @@ pub fn render_samples(
     count: u32,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<RenderStats, RenderError> {
-    let cam_desc = match (&s.camera, scene.camera(s.camera.as_deref())) {
-        (_, Some(c)) => c,
-        (Some(name), None) => {
-            let names: Vec<&str> = scene.cameras.iter().map(|(n, _)| n.as_str()).collect();
-            return Err(RenderError::NoCamera(name.clone(), names.join(", ")));
-        }
-        (None, None) => return Err(RenderError::NoCameras),
+    let li = |ray: Ray, sampler: &mut Sampler, stats: &mut RayStats| {
+        integrator::li(scene, ray, sampler, &s.params, stats)
     };
-    let camera = cam_desc.build(s.width, s.height);
+    render_samples_with(scene, s, film, first, count, progress, &li)
+}
+
+/// [`render_samples`] with the radiance given by `li`.
+pub fn render_samples_with(
+    scene: &Scene,
+    s: &RenderSettings,
+    film: &mut Film,
+    first: u32,
+    count: u32,
+    progress: &(dyn Fn(u64) + Sync),
+    li: &LiFn,
+) -> Result<RenderStats, RenderError> {
+    let camera = camera_for(scene, s)?;
     let (ox, oy, fw, fh) = s.window();
     let tiles_x = fw.div_ceil(TILE);
     let tiles_y = fh.div_ceil(TILE);
@@ -109,8 +140,7 @@ pub fn render_samples(
                     for i in first..first + count {
                         let mut sampler = Sampler::for_sample(s.sampler, s.seed, pixel, i as u64);
                         let ray = camera.generate_ray(gx, gy, sampler.next_2d());
-                        let l =
-                            integrator::li(scene, ray, &mut sampler, &s.params, &mut stats.rays);
+                        let l = li(ray, &mut sampler, &mut stats.rays);
                         if l.is_finite() {
                             px.add(l);
                         } else {
@@ -157,7 +187,7 @@ pub fn render_samples(
     Ok(stats)
 }
 
-/// Renders the whole image at `s.spp` samples per pixel.
+/// Renders the whole image at `s.spp` samples per pixel (`sppm`: `iterations` passes).
 pub fn render(
     scene: &Scene,
     s: &RenderSettings,
@@ -165,6 +195,42 @@ pub fn render(
 ) -> Result<(Film, RenderStats), RenderError> {
     let (_, _, w, h) = s.window();
     let mut film = Film::new(w, h);
-    let stats = render_samples(scene, s, &mut film, 0, s.spp, progress)?;
+    let stats = match s.params.kind {
+        IntegratorKind::Sppm => {
+            return integrator::sppm::render_sppm(scene, s, progress, &mut |_, _| {}, &|_| false)
+        }
+        IntegratorKind::Photon => {
+            camera_for(scene, s)?;
+            let maps = in_pool(s, || PhotonMaps::build(scene, &s.params, s.seed))?;
+            let ctx = integrator::photon::PhotonContext::new(scene, &maps);
+            let li = |ray: Ray, sampler: &mut Sampler, stats: &mut RayStats| {
+                integrator::photon::li(scene, &ctx, ray, sampler, &s.params, stats)
+            };
+            let mut stats = render_samples_with(scene, s, &mut film, 0, s.spp, progress, &li)?;
+            stats.photons_stored =
+                (maps.global.len() + maps.caustic.len() + maps.shadow.len()) as u64;
+            stats.photon_bytes = maps.memory_bytes() as u64;
+            stats.photon_time = maps.build_time;
+            stats.rays.rays += maps.rays;
+            stats.elapsed += maps.build_time;
+            stats
+        }
+        _ => render_samples(scene, s, &mut film, 0, s.spp, progress)?,
+    };
     Ok((film, stats))
+}
+
+/// Runs `f` on the settings' thread count.
+pub fn in_pool<T: Send>(
+    s: &RenderSettings,
+    f: impl FnOnce() -> T + Send,
+) -> Result<T, RenderError> {
+    match s.threads {
+        Some(t) => Ok(rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build()
+            .map_err(|e| RenderError::Threads(e.to_string()))?
+            .install(f)),
+        None => Ok(f()),
+    }
 }

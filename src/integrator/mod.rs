@@ -3,9 +3,16 @@
 //! - [`path`]: unidirectional path tracing with next-event estimation and multiple importance
 //!   sampling, ended by Russian roulette (unbiased).
 //! - [`direct`]: emission plus one bounce of direct light, seen through mirrors and glass.
+//! - [`photon`]: Jensen's two-pass photon mapping (biased, consistent as the photon counts
+//!   grow): direct light by shadow rays, caustics from a caustic map, indirect light by
+//!   final gathering into a global map.
+//! - [`sppm`]: stochastic progressive photon mapping (Hachisuka and Jensen 2009), its own
+//!   whole-image driver ([`sppm::render_sppm`]).
 
 pub mod direct;
 pub mod path;
+pub mod photon;
+pub mod sppm;
 
 use crate::geometry::Frame;
 use crate::material::sampling::power_heuristic;
@@ -19,6 +26,8 @@ use glam::Vec3A;
 pub enum IntegratorKind {
     Path,
     Direct,
+    Photon,
+    Sppm,
 }
 
 impl IntegratorKind {
@@ -26,6 +35,8 @@ impl IntegratorKind {
         match s {
             "path" => Some(IntegratorKind::Path),
             "direct" => Some(IntegratorKind::Direct),
+            "photon" => Some(IntegratorKind::Photon),
+            "sppm" => Some(IntegratorKind::Sppm),
             _ => None,
         }
     }
@@ -33,6 +44,8 @@ impl IntegratorKind {
         match self {
             IntegratorKind::Path => "path",
             IntegratorKind::Direct => "direct",
+            IntegratorKind::Photon => "photon",
+            IntegratorKind::Sppm => "sppm",
         }
     }
 }
@@ -60,6 +73,42 @@ pub struct IntegratorParams {
     pub hide_emitters: bool,
     /// `direct` follows mirrors and glass to the first non-specular surface.
     pub specular_chain: bool,
+    /// Settings of the `photon` and `sppm` integrators.
+    pub photon: PhotonParams,
+}
+
+/// Photon counts and search parameters of the photon-mapping integrators.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PhotonParams {
+    /// `photon`: photons emitted for the global map.
+    pub photons: u64,
+    /// `photon`: photons emitted for the caustic map (only those reaching a diffuse surface
+    /// by mirrors and glass are kept).
+    pub caustic_photons: u64,
+    /// `photon`: photons in each radiance estimate (k nearest).
+    pub gather_photons: u32,
+    /// `photon`: final-gather rays per camera sample.
+    pub final_gather: u32,
+    /// `sppm`: photon passes (and camera passes).
+    pub iterations: u32,
+    /// `sppm`: photons emitted per pass.
+    pub photons_per_iteration: u64,
+    /// `sppm`: initial search radius (world units); None: 1/200 of the scene's diagonal.
+    pub initial_radius: Option<f32>,
+}
+
+impl Default for PhotonParams {
+    fn default() -> Self {
+        PhotonParams {
+            photons: 200_000,
+            caustic_photons: 1_000_000,
+            gather_photons: 64,
+            final_gather: 8,
+            iterations: 64,
+            photons_per_iteration: 100_000,
+            initial_radius: None,
+        }
+    }
 }
 
 impl Default for IntegratorParams {
@@ -71,6 +120,7 @@ impl Default for IntegratorParams {
             rr: RussianRoulette::Throughput { start: 5 },
             hide_emitters: false,
             specular_chain: true,
+            photon: PhotonParams::default(),
         }
     }
 }
@@ -89,7 +139,8 @@ impl RayStats {
     }
 }
 
-/// Radiance along a camera ray, by the chosen integrator.
+/// Radiance along a camera ray, by the chosen integrator. The photon-mapping integrators
+/// need their maps (built by [`crate::render::render`]); here they fall back to `path`.
 #[inline]
 pub fn li(
     scene: &Scene,
@@ -99,7 +150,9 @@ pub fn li(
     stats: &mut RayStats,
 ) -> Color {
     match p.kind {
-        IntegratorKind::Path => path::li(scene, ray, sampler, p, stats),
+        IntegratorKind::Path | IntegratorKind::Photon | IntegratorKind::Sppm => {
+            path::li(scene, ray, sampler, p, stats)
+        }
         IntegratorKind::Direct => direct::li(scene, ray, sampler, p, stats),
     }
 }

@@ -787,7 +787,7 @@ fn settings(cx: &Ctx, r: &RenderT) -> Result<FileSettings, SceneError> {
                 cx.err(
                     i.span(),
                     format!(
-                        "unknown integrator '{}' (expected 'path' or 'direct')",
+                        "unknown integrator '{}' (expected 'path', 'direct', 'photon' or 'sppm')",
                         i.get_ref()
                     ),
                 )

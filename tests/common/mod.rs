@@ -2,6 +2,7 @@
 //! comparing block means against a reference with tolerances derived from measured noise.
 #![allow(dead_code)]
 
+pub mod caustic;
 pub mod cli;
 
 use mcrt::image::{read_exr, Image};

@@ -1,0 +1,217 @@
+//! Photon mapping (Jensen 2001): photons traced from the lights ([`trace`]), stored compactly
+//! ([`photon::Photon`], 24 bytes) in kd-trees ([`map::PhotonMap`]), and density estimation
+//! of the reflected radiance from them ([`radiance_estimate`]). Used by the `photon` and
+//! `sppm` integrators and the `photons` visualisation.
+
+pub mod map;
+#[allow(clippy::module_inception)]
+pub mod photon;
+pub mod trace;
+pub mod visualize;
+
+pub use map::{Found, PhotonMap};
+pub use photon::Photon;
+pub use trace::{trace_photons, TraceOptions, Traced};
+
+use crate::geometry::Frame;
+use crate::integrator::IntegratorParams;
+use crate::material::Material;
+use crate::scene::{Interaction, Scene};
+use crate::Color;
+use glam::Vec3A;
+use std::cell::RefCell;
+use std::collections::BinaryHeap;
+use std::time::{Duration, Instant};
+
+/// The maps of Jensen's two-pass method.
+#[derive(Clone, Debug, Default)]
+pub struct PhotonMaps {
+    /// Every non-specular hit of the global pass.
+    pub global: PhotonMap,
+    /// Photons whose path since the light was specular only (LS+D), from the caustic pass.
+    pub caustic: PhotonMap,
+    /// The global pass's direct photons (lit) and shadow photons: where both are found near
+    /// a point, it is in a penumbra; where only one kind, fully lit or fully in shadow.
+    pub shadow: PhotonMap,
+    /// Emitted photons of the global and caustic passes.
+    pub emitted_global: u64,
+    pub emitted_caustic: u64,
+    pub rays: u64,
+    pub build_time: Duration,
+}
+
+impl PhotonMaps {
+    /// Traces the global and caustic passes and builds the three maps. `max_depth` (path
+    /// segments, camera included) bounds the photon paths: a photon used at the end of a
+    /// camera path of s segments may have at most max_depth − s.
+    pub fn build(scene: &Scene, params: &IntegratorParams, seed: u64) -> PhotonMaps {
+        let t0 = Instant::now();
+        let md = params.max_depth.unwrap_or(u32::MAX);
+        let pp = &params.photon;
+        let global = trace_photons(
+            scene,
+            pp.photons,
+            &TraceOptions {
+                seed,
+                pass: 0,
+                // The camera path and the final-gather ray take at least two segments.
+                max_depth: md.saturating_sub(2).max(1),
+                shadow: true,
+                ..Default::default()
+            },
+        );
+        let caustic = trace_photons(
+            scene,
+            pp.caustic_photons,
+            &TraceOptions {
+                seed,
+                pass: 1,
+                max_depth: md.saturating_sub(1).max(1),
+                caustic_only: true,
+                ..Default::default()
+            },
+        );
+        let mut vis: Vec<Photon> = global
+            .photons
+            .iter()
+            .filter(|p| p.depth() == 1)
+            .copied()
+            .collect();
+        vis.extend_from_slice(&global.shadow);
+        PhotonMaps {
+            global: PhotonMap::build(global.photons),
+            caustic: PhotonMap::build(caustic.photons),
+            shadow: PhotonMap::build(vis),
+            emitted_global: global.emitted,
+            emitted_caustic: caustic.emitted,
+            rays: global.rays + caustic.rays,
+            build_time: t0.elapsed(),
+        }
+    }
+
+    pub fn memory_bytes(&self) -> usize {
+        self.global.memory_bytes() + self.caustic.memory_bytes() + self.shadow.memory_bytes()
+    }
+}
+
+/// Bounding-box diagonal of the scene (sets default search radii).
+pub fn scene_diagonal(scene: &Scene) -> f32 {
+    scene
+        .bvh
+        .bounds()
+        .map(|b| b.extent().length())
+        .filter(|d| d.is_finite() && *d > 0.0)
+        .unwrap_or(1.0)
+}
+
+/// Whether a photon at `q` lies within about 11° of the tangent plane at `p` (normal `n`):
+/// photons on a perpendicular surface nearby (a corner) are not counted, those on the same
+/// plane or a gently curved surface are.
+#[inline]
+pub fn on_surface(p: Vec3A, n: Vec3A, q: Vec3A) -> bool {
+    let d = q - p;
+    d.dot(n).abs() <= 0.2 * d.length() + 1e-4 * (1.0 + p.abs().max_element())
+}
+
+thread_local! {
+    static SCRATCH: RefCell<(BinaryHeap<Found>, Vec<Found>)> =
+        const { RefCell::new((BinaryHeap::new(), Vec::new())) };
+}
+
+/// Where a radiance estimate is made.
+pub struct ShadingPoint<'a> {
+    pub si: &'a Interaction,
+    pub frame: &'a Frame,
+    /// Towards the viewer, local frame.
+    pub wo: Vec3A,
+    /// Towards the viewer, world.
+    pub wo_world: Vec3A,
+    pub material: &'a Material,
+}
+
+impl ShadingPoint<'_> {
+    /// Whether a photon may have landed on this surface: it arrived on the side the viewer
+    /// sees, and lies near the tangent plane ([`on_surface`]).
+    #[inline]
+    pub fn same_side(&self, ph: &Photon) -> bool {
+        let ng = self.si.ng;
+        (ph.wi().dot(ng) > 0.0) == (self.wo_world.dot(ng) > 0.0)
+            && on_surface(self.si.p, ng, ph.pos())
+    }
+}
+
+/// Reflected radiance at `sp` towards the viewer from the `k` nearest photons within
+/// `r_max` whose path length is at most `max_depth`, with a cone filter (Jensen 2001, eq.
+/// 7.8, k = 1): L = Σ f·Φ·(1 − d/r) / ((1 − 2/3)·π·r²).
+pub fn radiance_estimate(
+    map: &PhotonMap,
+    sp: &ShadingPoint,
+    k: usize,
+    r_max: f32,
+    max_depth: u32,
+) -> Color {
+    if map.is_empty() || max_depth == 0 {
+        return Color::ZERO;
+    }
+    let all = max_depth >= photon::MAX_DEPTH;
+    let keep = |ph: &Photon| (all || ph.depth() <= max_depth) && sp.same_side(ph);
+    SCRATCH.with(|s| {
+        let (heap, out) = &mut *s.borrow_mut();
+        map.k_nearest(sp.si.p, k, r_max * r_max, &keep, heap, out);
+        if out.is_empty() {
+            return Color::ZERO;
+        }
+        let r2 = if out.len() == k {
+            out[out.len() - 1].d2
+        } else {
+            r_max * r_max
+        };
+        if r2.is_nan() || r2 <= 0.0 {
+            return Color::ZERO;
+        }
+        let r = r2.sqrt();
+        let mut sum = Color::ZERO;
+        for f in out.iter() {
+            let ph = &map.photons()[f.index as usize];
+            let wi = sp.frame.to_local(ph.wi());
+            let w = 1.0 - f.d2.sqrt() / r;
+            sum += sp.material.eval(sp.wo, wi) * ph.power() * w;
+        }
+        sum / ((1.0 / 3.0) * std::f32::consts::PI * r2)
+    })
+}
+
+/// What the shadow photons near a point say about its direct light.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Visibility {
+    Lit,
+    Shadowed,
+    Unknown,
+}
+
+/// Jensen's shadow-photon test: the nearest direct and shadow photons around `sp`; all lit,
+/// all in shadow, or mixed (or too few to tell).
+pub fn visibility(map: &PhotonMap, sp: &ShadingPoint, k: usize, r_max: f32) -> Visibility {
+    if map.is_empty() {
+        return Visibility::Unknown;
+    }
+    let keep = |ph: &Photon| sp.same_side(ph);
+    SCRATCH.with(|s| {
+        let (heap, out) = &mut *s.borrow_mut();
+        map.k_nearest(sp.si.p, k, r_max * r_max, &keep, heap, out);
+        if out.len() < k {
+            return Visibility::Unknown;
+        }
+        let shadow = out
+            .iter()
+            .filter(|f| map.photons()[f.index as usize].is_shadow())
+            .count();
+        if shadow == 0 {
+            Visibility::Lit
+        } else if shadow == out.len() {
+            Visibility::Shadowed
+        } else {
+            Visibility::Unknown
+        }
+    })
+}

@@ -1,0 +1,193 @@
+//! Photon shooting: photons leave the area lights in proportion to their power, from a point
+//! uniform on the light in a cosine-distributed direction, and bounce with the path tracer's
+//! BSDFs (importance transport); Russian roulette by the BSDF sample's weight (the albedo for
+//! diffuse surfaces) keeps their power nearly constant. Photons are stored at non-specular
+//! hits.
+//!
+//! Photon i draws its numbers from a PCG32 stream keyed by (seed, pass, i) and photons are
+//! traced in parallel chunks collected in index order: the photons, and the maps built from
+//! them, are the same bits on any number of threads.
+
+use super::photon::Photon;
+use crate::geometry::ray::offset_ray_origin;
+use crate::geometry::{Frame, Ray};
+use crate::light::distribution::Distribution1D;
+use crate::material::sampling::square_to_cosine_hemisphere;
+use crate::material::TransportMode;
+use crate::sampler::{mix64, Sampler};
+use crate::scene::Scene;
+use crate::Color;
+use rayon::prelude::*;
+
+/// Which photons a pass keeps.
+#[derive(Clone, Copy, Debug)]
+pub struct TraceOptions {
+    pub seed: u64,
+    /// Distinguishes the random streams of different passes (global, caustic, SPPM
+    /// iterations) under one seed.
+    pub pass: u64,
+    /// Longest photon path in segments (light to the last stored hit).
+    pub max_depth: u32,
+    /// Keep only photons whose path was specular since the light (and then stop).
+    pub caustic_only: bool,
+    /// Keep photons only from this many segments on (1: all; 2: not the direct ones).
+    pub min_depth: u32,
+    /// Also record shadow photons: the continuation of each photon's first segment through
+    /// the surfaces behind the first hit.
+    pub shadow: bool,
+}
+
+impl Default for TraceOptions {
+    fn default() -> Self {
+        TraceOptions {
+            seed: 0,
+            pass: 0,
+            max_depth: u32::MAX,
+            caustic_only: false,
+            min_depth: 1,
+            shadow: false,
+        }
+    }
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct Traced {
+    pub photons: Vec<Photon>,
+    pub shadow: Vec<Photon>,
+    /// Photons emitted (the powers are normalised by it).
+    pub emitted: u64,
+    pub rays: u64,
+}
+
+/// Photons traced per parallel work item.
+const CHUNK: u64 = 4096;
+/// Surfaces a shadow photon's ray passes through at most.
+const MAX_SHADOW_HITS: u32 = 4;
+
+/// The distribution over the scene's area lights by power, or None without any.
+pub fn light_distribution(scene: &Scene) -> Option<Distribution1D> {
+    let powers: Vec<f32> = scene.lights.lights.iter().map(|l| l.power()).collect();
+    let d = Distribution1D::new(&powers);
+    (!d.is_empty()).then_some(d)
+}
+
+/// Emits `n` photons and traces them through the scene.
+pub fn trace_photons(scene: &Scene, n: u64, o: &TraceOptions) -> Traced {
+    let Some(dist) = light_distribution(scene) else {
+        return Traced {
+            emitted: n,
+            ..Default::default()
+        };
+    };
+    let chunks = n.div_ceil(CHUNK);
+    let parts: Vec<Traced> = (0..chunks)
+        .into_par_iter()
+        .map(|c| {
+            let mut t = Traced::default();
+            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                trace_one(scene, &dist, n, i, o, &mut t);
+            }
+            t
+        })
+        .collect();
+    let total: usize = parts.iter().map(|t| t.photons.len()).sum();
+    let total_shadow: usize = parts.iter().map(|t| t.shadow.len()).sum();
+    let mut out = Traced {
+        photons: Vec::with_capacity(total),
+        shadow: Vec::with_capacity(total_shadow),
+        emitted: n,
+        rays: 0,
+    };
+    for p in parts {
+        out.photons.extend_from_slice(&p.photons);
+        out.shadow.extend_from_slice(&p.shadow);
+        out.rays += p.rays;
+    }
+    out
+}
+
+/// The random numbers of photon `i` of a pass.
+pub fn photon_sampler(seed: u64, pass: u64, i: u64) -> Sampler {
+    let key = mix64(mix64(seed ^ 0x5851_f42d_4c95_7f2d) ^ pass.wrapping_mul(0x9e37_79b9_7f4a_7c15));
+    Sampler::from_state(mix64(key ^ i.wrapping_mul(0xd1b5_4a32_d192_ed03)), key)
+}
+
+fn trace_one(
+    scene: &Scene,
+    dist: &Distribution1D,
+    n: u64,
+    i: u64,
+    o: &TraceOptions,
+    t: &mut Traced,
+) {
+    let mut s = photon_sampler(o.seed, o.pass, i);
+    let Some((id, pmf)) = dist.sample_discrete(s.next_1d()) else {
+        return;
+    };
+    let light = &scene.lights.lights[id];
+    let (p, nl, err) = light.sample_point(s.next_2d());
+    let d = Frame::from_normal(nl).to_world(square_to_cosine_hemisphere(s.next_2d()));
+    // Le·cos / (pmf · 1/A · cos/π) / n
+    let mut power = light.radiance * (std::f32::consts::PI * light.area / (pmf * n as f32));
+    let mut ray = Ray::new(offset_ray_origin(p, err, nl, d), d);
+    let mut depth = 1u32;
+    let mut specular_path = true;
+    loop {
+        t.rays += 1;
+        let Some(si) = scene.intersect(&ray) else {
+            break;
+        };
+        if o.shadow && depth == 1 {
+            let mut r = Ray::new(offset_ray_origin(si.p, si.p_err, si.ng, ray.d), ray.d);
+            for _ in 0..MAX_SHADOW_HITS {
+                t.rays += 1;
+                let Some(h) = scene.intersect(&r) else { break };
+                t.shadow.push(Photon::shadow(h.p, -ray.d));
+                r = Ray::new(offset_ray_origin(h.p, h.p_err, h.ng, ray.d), ray.d);
+            }
+        }
+        let material = scene.material_at(&si);
+        if material.is_black() {
+            break;
+        }
+        if !material.is_specular() {
+            let caustic = specular_path && depth > 1;
+            if depth >= o.min_depth && (!o.caustic_only || caustic) {
+                t.photons
+                    .push(Photon::new(si.p, power, -ray.d, depth, caustic));
+            }
+            if o.caustic_only {
+                break;
+            }
+            specular_path = false;
+        }
+        if depth >= o.max_depth {
+            break;
+        }
+        let frame = Frame::from_normal(si.ns);
+        let wo = frame.to_local(-ray.d);
+        let u1 = s.next_1d();
+        let u2 = s.next_2d();
+        let Some(bs) = material.sample(wo, u1, u2, TransportMode::Importance) else {
+            break;
+        };
+        // Russian roulette by the sample's weight: survivors keep (about) their power.
+        let q = bs.weight.max_element().min(1.0);
+        if q.is_nan() || q <= 0.0 || s.next_1d() >= q {
+            break;
+        }
+        power *= bs.weight / q;
+        ray = si.spawn_ray(frame.to_world(bs.wi));
+        depth += 1;
+    }
+}
+
+/// Total power of the scene's area lights per RGB channel (W).
+pub fn light_power_rgb(scene: &Scene) -> Color {
+    scene
+        .lights
+        .lights
+        .iter()
+        .map(|l| l.radiance * (std::f32::consts::PI * l.area))
+        .sum()
+}
