@@ -119,7 +119,22 @@ pub fn load_scene_with(path: &Path, opts: &LoadOptions) -> Result<SceneDesc, Err
 pub fn render_memory(s: &RenderSettings) -> u64 {
     let (_, _, w, h) = s.window();
     let per_pixel = 2 * std::mem::size_of::<[i128; 3]>() + std::mem::size_of::<u32>() + 12;
-    w as u64 * h as u64 * per_pixel as u64
+    let film = w as u64 * h as u64 * per_pixel as u64;
+    film.saturating_add(photon_memory(s))
+}
+
+/// Bytes the photon maps may take: each emitted photon can be stored at every diffuse
+/// bounce; budget `PHOTON_BOUNCES` stored photons (and a shadow photon) per emitted one.
+fn photon_memory(s: &RenderSettings) -> u64 {
+    const PHOTON_BOUNCES: u64 = 8;
+    let bytes = std::mem::size_of::<photon::Photon>() as u64;
+    let p = &s.params.photon;
+    let emitted = match s.params.kind {
+        IntegratorKind::Photon => p.photons.saturating_add(p.caustic_photons),
+        IntegratorKind::Sppm => p.photons_per_iteration,
+        _ => 0,
+    };
+    emitted.saturating_mul((PHOTON_BOUNCES + 1) * bytes)
 }
 
 /// Memory the system can still give, from /proc/meminfo (None where that is unknown).
@@ -138,8 +153,9 @@ pub fn check_memory(s: &RenderSettings) -> Result<(), Error> {
             let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
             let (_, _, w, h) = s.window();
             return Err(Error::Usage(format!(
-                "a {w} × {h} image needs {:.1} GiB for its film, but only {:.1} GiB of memory \
-                 is available; render a smaller image (--width, --height) or a crop",
+                "a {w} × {h} image needs up to {:.1} GiB for its film and photon maps, but only \
+                 {:.1} GiB of memory is available; render a smaller image (--width, --height), \
+                 a crop, or with fewer photons",
                 gib(need),
                 gib(have)
             )));

@@ -583,3 +583,21 @@ fn max_depth_zero_is_black() {
     let lit = img.pixels.iter().filter(|p| p.max_element() > 0.0).count();
     assert_eq!(lit, 0, "max_depth 0 should give a black image");
 }
+
+/// Photon maps that would not fit in memory are refused before any photon is traced.
+#[test]
+fn photon_maps_beyond_memory_are_refused() {
+    let dir = TempDir::new("photon-memory");
+    let out = dir.path().join("out.png");
+    let scene = scene_path("tncg15.toml");
+    check_failure(
+        &dir,
+        &scene,
+        &out,
+        &["--integrator", "photon", "--photons", "100000000000"],
+        &scene,
+        None,
+        None,
+        &["photon maps", "GiB", "fewer photons"],
+    );
+}
