@@ -590,14 +590,20 @@ fn photon_maps_beyond_memory_are_refused() {
     let dir = TempDir::new("photon-memory");
     let out = dir.path().join("out.png");
     let scene = scene_path("tncg15.toml");
-    check_failure(
-        &dir,
-        &scene,
-        &out,
-        &["--integrator", "photon", "--photons", "100000000000"],
-        &scene,
-        None,
-        None,
-        &["photon maps", "GiB", "fewer photons"],
-    );
+    let o = run(&[
+        "render".as_ref(),
+        scene.as_os_str(),
+        "-o".as_ref(),
+        out.as_os_str(),
+        "--integrator".as_ref(),
+        "photon".as_ref(),
+        "--photons".as_ref(),
+        "100000000000".as_ref(),
+    ]);
+    let err = stderr_of(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    for want in ["photon maps", "GiB", "fewer photons"] {
+        assert!(err.contains(want), "{want:?} missing from:\n{err}");
+    }
+    assert!(!out.exists());
 }
