@@ -7,6 +7,7 @@
 
 pub mod accel;
 pub mod camera;
+pub mod checkpoint;
 pub mod compare;
 pub mod film;
 pub mod geometry;
@@ -15,6 +16,7 @@ pub mod integrator;
 pub mod light;
 pub mod material;
 pub mod parts;
+pub mod progressive;
 pub mod render;
 pub mod sampler;
 pub mod scene;
