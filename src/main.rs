@@ -26,7 +26,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Render a scene to an image (.png: 8-bit sRGB, tone mapped; .exr: linear RGB).
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// Merge the sums files of `render --pass K/N` into the image of a single render.
     ///
     /// Give all N passes, once each, in any order. They must come from the same scene file,
@@ -213,7 +213,7 @@ static CANCEL: AtomicBool = AtomicBool::new(false);
 fn main() {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Render(args) => render(args),
+        Command::Render(args) => render(*args),
         Command::Merge(args) => merge(args).map(|_| 0),
         Command::Compare(args) => compare(args).map(|_| 0),
     };
