@@ -100,6 +100,28 @@ pub fn relative_error(film: &Film) -> (f64, Vec<f64>) {
     (e, r)
 }
 
+/// The root mean square of the per-pixel errors `r` over each pixel's 3 × 3 neighbourhood
+/// (within the image): what `--adaptive` decides by. A single pixel's estimate from few
+/// samples is itself noisy, worst where a rare bright path has not been found yet; pooling
+/// it with its neighbours' keeps such a pixel rendering while the region around it is noisy.
+pub fn window_error(r: &[f64], width: u32, height: u32) -> Vec<f64> {
+    let (w, h) = (width as i64, height as i64);
+    let mut out = Vec::with_capacity(r.len());
+    for y in 0..h {
+        for x in 0..w {
+            let (mut s, mut n) = (0.0, 0.0);
+            for yy in (y - 1).max(0)..=(y + 1).min(h - 1) {
+                for xx in (x - 1).max(0)..=(x + 1).min(w - 1) {
+                    s += r[(yy * w + xx) as usize].powi(2);
+                    n += 1.0;
+                }
+            }
+            out.push((s / n).sqrt());
+        }
+    }
+    out
+}
+
 /// What [`render_progressive`] did.
 #[derive(Clone, Debug)]
 pub struct Outcome {
@@ -197,7 +219,7 @@ pub fn render_progressive<E: From<RenderError>>(
         let targets: Vec<u32> = match (&per_pixel, budget.adaptive, budget.target_noise) {
             (Some((_, r)), true, Some(t)) => next
                 .iter()
-                .zip(r)
+                .zip(&window_error(r, film.width, film.height))
                 .map(|(&n, &ri)| {
                     if ri <= t {
                         return n;
