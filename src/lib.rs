@@ -6,6 +6,7 @@
 //! tiles → [`film::Film`] → image file.
 
 pub mod accel;
+pub mod aov;
 pub mod camera;
 pub mod checkpoint;
 pub mod compare;

@@ -4,7 +4,9 @@ use clap::{Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use mcrt::checkpoint::{self, Checkpoint};
 use mcrt::film::Film;
-use mcrt::image::{check_output_path, write_image, Format, ToneMap, WriteOptions};
+use mcrt::image::{
+    check_output_path, write_image, write_image_with, Format, ToneMap, WriteOptions,
+};
 use mcrt::integrator::IntegratorKind;
 use mcrt::parts::{self, Pass};
 use mcrt::progressive::Stop;
@@ -116,7 +118,7 @@ struct RenderArgs {
     image: ImageArgs,
     /// Render only pass K of N (1-based): samples [⌊(K−1)·spp/N⌋, ⌊K·spp/N⌋) of every pixel,
     /// written as a sums file (-o must be .exr) for `mcrt merge`.
-    #[arg(long, value_name = "K/N", conflicts_with_all = ["time", "target_noise", "write_partial", "checkpoint", "resume"])]
+    #[arg(long, value_name = "K/N", conflicts_with_all = ["time", "target_noise", "write_partial", "checkpoint", "resume", "aov"])]
     pass: Option<mcrt::parts::Pass>,
     /// Time budget (90s, 10m, 2h, 250ms, or seconds): render progressive passes until it is
     /// spent. Without --spp the sample count is unbounded (the scene file's spp is ignored).
@@ -141,6 +143,10 @@ struct RenderArgs {
     /// be larger).
     #[arg(long, value_name = "CHECKPOINT.exr")]
     resume: Option<PathBuf>,
+    /// Extra layers of the output EXR, comma-separated: albedo, normal, depth, variance, spp
+    /// (for denoisers; see README, "AOVs"). -o must be .exr.
+    #[arg(long, value_name = "LIST")]
+    aov: Option<String>,
     /// No progress bar and no summary line.
     #[arg(short, long)]
     quiet: bool,
@@ -268,6 +274,16 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
                 "--target-noise must be a positive number, got {e}"
             )));
         }
+    }
+    let aovs = match &a.aov {
+        Some(list) => mcrt::aov::parse_list(list).map_err(Error::Usage)?,
+        None => Vec::new(),
+    };
+    if !aovs.is_empty() && format != Format::Exr {
+        return Err(Error::Usage(format!(
+            "{}: --aov writes extra layers of an OpenEXR image; use an .exr output",
+            output.display()
+        )));
     }
     let checkpoint_path = a
         .checkpoint
@@ -428,6 +444,11 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
         b
     };
     let opts = a.image.options();
+    let guides = if aovs.iter().any(|v| v.needs_guides()) {
+        Some(mcrt::aov::render_guides(&scene, &settings)?)
+    } else {
+        None
+    };
     let save_checkpoint = |film: &Film, next: &[u32]| -> Result<(), Error> {
         let c = Checkpoint::new(
             &a.scene,
@@ -441,7 +462,8 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
         Ok(())
     };
     let write_output = |film: &Film| -> Result<(), Error> {
-        write_image(&output, &film.image(), &opts)?;
+        let layers = mcrt::aov::channels(&aovs, guides.as_ref(), film);
+        write_image_with(&output, &film.image(), &opts, &layers)?;
         Ok(())
     };
     let mut last_partial = Instant::now();

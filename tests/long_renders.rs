@@ -462,3 +462,127 @@ fn partial_images_are_written_during_the_render() {
     assert!(read_exr(&out).is_ok());
     assert_eq!(dir.listing(), vec!["p.exr".to_string()]);
 }
+
+/// The channels of an EXR's first layer, by name.
+fn exr_channels(path: &Path) -> std::collections::BTreeMap<String, Vec<f32>> {
+    use exr::prelude::*;
+    let img = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .expect("the EXR opens with the exr crate");
+    img.layer_data
+        .channel_data
+        .list
+        .iter()
+        .map(|c| {
+            let v = c.sample_data.values_as_f32().collect();
+            (c.name.to_string(), v)
+        })
+        .collect()
+}
+
+/// `--aov`: the layers open with the `exr` crate under OpenEXR/OIDN names, and hold the red
+/// wall's albedo, the floor's normal, distances, variances and sample counts.
+#[test]
+fn aov_layers_hold_albedo_normal_depth_variance_spp() {
+    let dir = TempDir::new("aov");
+    let out = dir.path().join("aov.exr");
+    let o = render_cmd(
+        &out,
+        32,
+        &["--spp", "4", "--aov", "albedo,normal,depth,variance,spp"],
+    )
+    .output()
+    .unwrap();
+    ok(&o, "render --aov");
+    let ch = exr_channels(&out);
+    let names: Vec<&str> = ch.keys().map(|s| s.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "B",
+            "G",
+            "R",
+            "albedo.B",
+            "albedo.G",
+            "albedo.R",
+            "depth.Z",
+            "normal.X",
+            "normal.Y",
+            "normal.Z",
+            "spp.Y",
+            "variance.B",
+            "variance.G",
+            "variance.R"
+        ]
+    );
+    let at = |name: &str, x: usize, y: usize| ch[name][y * 32 + x];
+    // The image itself is the plain render's.
+    let plain = dir.path().join("plain.exr");
+    ok(
+        &render_cmd(&plain, 32, &["--spp", "4"]).output().unwrap(),
+        "render",
+    );
+    let img = read_exr(&out).unwrap();
+    assert!(bits(&img) == bits(&read_exr(&plain).unwrap()));
+    // The red wall (x = −1) fills the left columns above the tall box.
+    let red = [0.570068f32, 0.0430135, 0.0443706];
+    for (x, y) in [(1, 6), (2, 10), (3, 12)] {
+        let a = [
+            at("albedo.R", x, y),
+            at("albedo.G", x, y),
+            at("albedo.B", x, y),
+        ];
+        assert_eq!(a, red, "albedo at ({x}, {y})");
+        let n = [
+            at("normal.X", x, y),
+            at("normal.Y", x, y),
+            at("normal.Z", x, y),
+        ];
+        assert_eq!(n, [1.0, 0.0, 0.0], "red wall normal at ({x}, {y})");
+    }
+    // The floor (y = −1, normal +y) in the bottom rows, beside and between the boxes.
+    for (x, y) in [(7, 27), (10, 29), (26, 29)] {
+        let n = [
+            at("normal.X", x, y),
+            at("normal.Y", x, y),
+            at("normal.Z", x, y),
+        ];
+        assert_eq!(n, [0.0, 1.0, 0.0], "floor normal at ({x}, {y})");
+        let a = at("albedo.R", x, y);
+        assert_eq!(a, 0.885809, "white floor albedo at ({x}, {y})");
+    }
+    // Depth: the distance to the first hit. The back wall (z = −1) is 4.9 ahead of the
+    // camera at z = 3.9; pixel (16, 8) looks at it 9.5° above the axis: 4.9/cos 9.5° = 4.97.
+    let d = at("depth.Z", 16, 8);
+    assert!((4.95..4.99).contains(&d), "depth {d}");
+    assert!(ch["depth.Z"].iter().all(|&d| d > 2.0 && d.is_finite()));
+    // spp: 4 everywhere; variance: the film's s²/n, non-negative, positive somewhere.
+    assert!(ch["spp.Y"].iter().all(|&n| n == 4.0));
+    assert!(ch["variance.R"].iter().all(|&v| v >= 0.0));
+    assert!(ch["variance.G"].iter().any(|&v| v > 0.0));
+}
+
+/// `--aov` needs an .exr output and known names.
+#[test]
+fn aov_needs_exr_and_known_names() {
+    let dir = TempDir::new("aov-bad");
+    for (out, list, expect) in [
+        ("a.png", "albedo", ".exr"),
+        ("a.exr", "albedo,colour", "unknown AOV 'colour'"),
+        ("a.exr", "depth,depth", "twice"),
+    ] {
+        let out = dir.path().join(out);
+        let o = render_cmd(&out, 8, &["--spp", "1", "--aov", list])
+            .output()
+            .unwrap();
+        let err = stderr_of(&o);
+        assert_eq!(o.status.code(), Some(2), "{list}: {err}");
+        assert!(err.contains(expect), "{list}: {err}");
+        assert!(!out.exists());
+    }
+}
