@@ -242,10 +242,10 @@ fn time_budget_stops_on_time() {
     let err = stderr_of(&o);
     assert!(err.contains("stopped: time budget spent"), "{err}");
     // The passes stop within the budget plus the last tiles in flight (a tile of 16×16
-    // pixels takes milliseconds) and the writing of a 24×24 image: one second of slack for
+    // pixels takes milliseconds) and the writing of a 24×24 image: 1.5 s of slack for
     // a busy machine.
     assert!(wall >= Duration::from_secs(1), "{wall:?}");
-    assert!(wall < Duration::from_secs(2), "{wall:?}: {err}");
+    assert!(wall < Duration::from_millis(2500), "{wall:?}: {err}");
     assert!(read_exr(&out)
         .unwrap()
         .pixels
