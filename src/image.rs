@@ -193,6 +193,62 @@ pub fn write_image(path: &Path, img: &Image, opts: &WriteOptions) -> Result<(), 
     })
 }
 
+/// Writes an EXR image with extra channels (name, one f32 per pixel, e.g. `albedo.R`) beside
+/// its `R`, `G`, `B`, atomically. Without extra channels it is [`write_image`].
+pub fn write_image_with(
+    path: &Path,
+    img: &Image,
+    opts: &WriteOptions,
+    extra: &[(String, Vec<f32>)],
+) -> Result<(), ImageError> {
+    if extra.is_empty() {
+        return write_image(path, img, opts);
+    }
+    if Format::from_path(path)? != Format::Exr {
+        return Err(ImageError::Io {
+            path: path.to_path_buf(),
+            message: "extra layers need an .exr image".into(),
+        });
+    }
+    write_atomic(path, |tmp| write_exr_layers(tmp, img, opts.half, extra))
+}
+
+fn write_exr_layers(
+    path: &Path,
+    img: &Image,
+    half: bool,
+    extra: &[(String, Vec<f32>)],
+) -> Result<(), String> {
+    use exr::prelude::*;
+    let (w, h) = (img.width as usize, img.height as usize);
+    let mut channels: Vec<AnyChannel<FlatSamples>> = Vec::new();
+    for (c, name) in ["R", "G", "B"].iter().enumerate() {
+        let v = img.pixels.iter().map(|p| p[c]);
+        let samples = if half {
+            FlatSamples::F16(v.map(f16::from_f32).collect())
+        } else {
+            FlatSamples::F32(v.collect())
+        };
+        channels.push(AnyChannel::new(*name, samples));
+    }
+    for (name, v) in extra {
+        if v.len() != w * h {
+            return Err(format!("layer {name} does not have the image's size"));
+        }
+        channels.push(AnyChannel::new(name.as_str(), FlatSamples::F32(v.clone())));
+    }
+    let layer = Layer::new(
+        (w, h),
+        LayerAttributes::default(),
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(channels.into()),
+    );
+    exr::image::Image::from_layer(layer)
+        .write()
+        .to_file(path)
+        .map_err(|e| e.to_string())
+}
+
 /// Writes a file atomically: `write` fills a temporary file in the same directory, which is
 /// then renamed to `path` (and removed if anything fails).
 pub fn write_atomic(

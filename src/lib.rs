@@ -6,7 +6,9 @@
 //! tiles → [`film::Film`] → image file.
 
 pub mod accel;
+pub mod aov;
 pub mod camera;
+pub mod checkpoint;
 pub mod compare;
 pub mod film;
 pub mod geometry;
@@ -16,6 +18,7 @@ pub mod light;
 pub mod material;
 pub mod parts;
 pub mod photon;
+pub mod progressive;
 pub mod render;
 pub mod sampler;
 pub mod scene;

@@ -2,14 +2,20 @@
 
 use clap::{Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use mcrt::image::{check_output_path, write_image, Format, ToneMap, WriteOptions};
+use mcrt::checkpoint::{self, Checkpoint};
+use mcrt::film::Film;
+use mcrt::image::{
+    check_output_path, write_image, write_image_with, Format, ToneMap, WriteOptions,
+};
 use mcrt::integrator::IntegratorKind;
 use mcrt::parts::{self, Pass};
+use mcrt::progressive::Stop;
 use mcrt::scene::desc::FileSettings;
 use mcrt::scene::{Scene, SceneError};
 use mcrt::Error;
 use std::io::IsTerminal;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 #[derive(Parser)]
@@ -22,7 +28,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Render a scene to an image (.png: 8-bit sRGB, tone mapped; .exr: linear RGB).
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// Merge the sums files of `render --pass K/N` into the image of a single render.
     ///
     /// Give all N passes, once each, in any order. They must come from the same scene file,
@@ -205,8 +211,35 @@ struct RenderArgs {
     image: ImageArgs,
     /// Render only pass K of N (1-based): samples [⌊(K−1)·spp/N⌋, ⌊K·spp/N⌋) of every pixel,
     /// written as a sums file (-o must be .exr) for `mcrt merge`.
-    #[arg(long, value_name = "K/N")]
+    #[arg(long, value_name = "K/N", conflicts_with_all = ["time", "target_noise", "write_partial", "checkpoint", "resume", "aov"])]
     pass: Option<mcrt::parts::Pass>,
+    /// Time budget (90s, 10m, 2h, 250ms, or seconds): render progressive passes until it is
+    /// spent. Without --spp the sample count is unbounded (the scene file's spp is ignored).
+    #[arg(long, value_name = "DURATION", value_parser = mcrt::progressive::parse_duration)]
+    time: Option<std::time::Duration>,
+    /// Stop when the estimated relative standard error of the image falls to E (e.g. 0.01;
+    /// see README, "Long renders"). Without --spp the sample count is unbounded.
+    #[arg(long, value_name = "E")]
+    target_noise: Option<f64>,
+    /// With --target-noise: after the first estimate, spend further samples only on pixels
+    /// whose error is still above the target.
+    #[arg(long, requires = "target_noise")]
+    adaptive: bool,
+    /// Rewrite the output image (atomically) at most this often while rendering.
+    #[arg(long, value_name = "DURATION", value_parser = mcrt::progressive::parse_duration)]
+    write_partial: Option<std::time::Duration>,
+    /// Where to write the checkpoint (default: OUTPUT's stem + .checkpoint.exr). Given, it is
+    /// also written with every partial image and at the end; otherwise only on interruption.
+    #[arg(long, value_name = "PATH.exr")]
+    checkpoint: Option<PathBuf>,
+    /// Continue the render saved in this checkpoint (same scene, settings and seed; --spp may
+    /// be larger).
+    #[arg(long, value_name = "CHECKPOINT.exr")]
+    resume: Option<PathBuf>,
+    /// Extra layers of the output EXR, comma-separated: albedo, normal, depth, variance, spp
+    /// (for denoisers; see README, "AOVs"). -o must be .exr.
+    #[arg(long, value_name = "LIST")]
+    aov: Option<String>,
     /// No progress bar and no summary line.
     #[arg(short, long)]
     quiet: bool,
@@ -272,21 +305,42 @@ struct CompareArgs {
     diff_range: Option<f64>,
 }
 
+/// Exit status after an interrupted render (128 + SIGINT, as shells report it).
+const INTERRUPTED: i32 = 130;
+
+/// Set by SIGINT or SIGTERM: the render stops at the next tile.
+static CANCEL: AtomicBool = AtomicBool::new(false);
+
 fn main() {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Render(args) => render(args),
-        Command::Merge(args) => merge(args),
-        Command::Compare(args) => compare(args),
-        Command::Photons(args) => photons(args),
+        Command::Render(args) => render(*args),
+        Command::Merge(args) => merge(args).map(|_| 0),
+        Command::Compare(args) => compare(args).map(|_| 0),
+        Command::Photons(args) => photons(args).map(|_| 0),
     };
-    if let Err(e) = result {
-        eprintln!("error: {e}");
-        std::process::exit(e.exit_code());
+    match result {
+        Ok(0) => {}
+        Ok(code) => std::process::exit(code),
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::exit(e.exit_code());
+        }
     }
 }
 
-fn render(a: RenderArgs) -> Result<(), Error> {
+/// Catches SIGINT and SIGTERM: the first sets [`CANCEL`] (the render writes the image and a
+/// checkpoint and exits with status 130); a second one exits at once.
+fn catch_signals() {
+    let _ = ctrlc::set_handler(|| {
+        if CANCEL.swap(true, Ordering::SeqCst) {
+            std::process::exit(INTERRUPTED);
+        }
+    });
+}
+
+/// Renders; returns the exit status (0, or 130 when interrupted).
+fn render(a: RenderArgs) -> Result<i32, Error> {
     let output = a.output.clone().unwrap_or_else(|| {
         PathBuf::from(a.scene.file_stem().unwrap_or_default()).with_extension("png")
     });
@@ -309,6 +363,36 @@ fn render(a: RenderArgs) -> Result<(), Error> {
     };
     if a.threads == Some(0) {
         return Err(Error::Usage("--threads must be at least 1".into()));
+    }
+    if let Some(e) = a.target_noise {
+        if !(e > 0.0 && e.is_finite()) {
+            return Err(Error::Usage(format!(
+                "--target-noise must be a positive number, got {e}"
+            )));
+        }
+    }
+    let aovs = match &a.aov {
+        Some(list) => mcrt::aov::parse_list(list).map_err(Error::Usage)?,
+        None => Vec::new(),
+    };
+    if !aovs.is_empty() && format != Format::Exr {
+        return Err(Error::Usage(format!(
+            "{}: --aov writes extra layers of an OpenEXR image; use an .exr output",
+            output.display()
+        )));
+    }
+    let checkpoint_path = a
+        .checkpoint
+        .clone()
+        .unwrap_or_else(|| mcrt::checkpoint::default_path(&output));
+    if a.pass.is_none() {
+        if check_output_path(&checkpoint_path)? != Format::Exr {
+            return Err(Error::Usage(format!(
+                "{}: a checkpoint is a sums file, which must be .exr",
+                checkpoint_path.display()
+            )));
+        }
+        catch_signals();
     }
     let t_load = Instant::now();
     let mut defines = Vec::new();
@@ -383,11 +467,213 @@ fn render(a: RenderArgs) -> Result<(), Error> {
     let load_time = t_load.elapsed();
 
     let (_, _, fw, fh) = settings.window();
-    let passes = match settings.params.kind {
-        IntegratorKind::Sppm => settings.params.photon.iterations,
-        _ => a.pass.map_or(settings.spp, |p| p.share(settings.spp).1),
+    let npix = fw as u64 * fh as u64;
+    let scene_bytes = std::fs::read(&a.scene).unwrap_or_default();
+    let extra = format!("defines={:?} lenient={}", a.define, a.lenient);
+    if matches!(
+        settings.params.kind,
+        IntegratorKind::Photon | IntegratorKind::Sppm
+    ) {
+        return render_photon(&a, &scene, &settings, &output, load_time);
+    }
+    if let Some(pass) = a.pass {
+        return render_pass(
+            &a,
+            &scene,
+            &settings,
+            pass,
+            &output,
+            &scene_bytes,
+            &extra,
+            load_time,
+        );
+    }
+    // Budgets: with --time or --target-noise, only --spp bounds the samples.
+    let budget = mcrt::progressive::Budget {
+        spp: if (a.time.is_some() || a.target_noise.is_some()) && a.spp.is_none() {
+            None
+        } else {
+            Some(settings.spp)
+        },
+        time: a.time,
+        target_noise: a.target_noise,
+        adaptive: a.adaptive,
+        max_pass: a.write_partial,
     };
-    let total = fw as u64 * fh as u64 * passes as u64;
+    let (mut film, mut next) = match &a.resume {
+        None => (Film::new(fw, fh), vec![0; npix as usize]),
+        Some(path) => {
+            let c = checkpoint::read_checkpoint(path)?;
+            let now = Checkpoint::new(
+                &a.scene,
+                &scene_bytes,
+                &extra,
+                &settings,
+                Film::new(0, 0),
+                vec![],
+            );
+            c.check_matches(path, &now.meta)?;
+            if let Some(cap) = budget.spp {
+                if c.meta.spp > cap {
+                    return Err(Error::Usage(format!(
+                        "{}: the checkpoint already holds {} samples per pixel, more than the {cap} asked for (--spp)",
+                        path.display(),
+                        c.meta.spp
+                    )));
+                }
+            }
+            (c.film, c.next)
+        }
+    };
+    let resumed_from = next.iter().copied().min().unwrap_or(0);
+    let show = !a.quiet && std::io::stderr().is_terminal();
+    let bar = if !show {
+        ProgressBar::hidden()
+    } else if let Some(cap) = budget.spp {
+        let done: u64 = next.iter().map(|&n| n as u64).sum();
+        let b = ProgressBar::new(npix * cap as u64);
+        b.set_style(
+            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}%  {human_pos}/{human_len} samples  {per_sec}  ETA {eta}")
+                .unwrap(),
+        );
+        b.set_position(done);
+        b
+    } else {
+        let b = ProgressBar::new_spinner();
+        b.set_style(
+            ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] {human_pos} samples  {per_sec}  {msg}",
+            )
+            .unwrap(),
+        );
+        b
+    };
+    let opts = a.image.options();
+    let guides = if aovs.iter().any(|v| v.needs_guides()) {
+        Some(mcrt::aov::render_guides(&scene, &settings)?)
+    } else {
+        None
+    };
+    let save_checkpoint = |film: &Film, next: &[u32]| -> Result<(), Error> {
+        let c = Checkpoint::new(
+            &a.scene,
+            &scene_bytes,
+            &extra,
+            &settings,
+            film.clone(),
+            next.to_vec(),
+        );
+        checkpoint::write_checkpoint(&checkpoint_path, &c)?;
+        Ok(())
+    };
+    let write_output = |film: &Film| -> Result<(), Error> {
+        let layers = mcrt::aov::channels(&aovs, guides.as_ref(), film);
+        write_image_with(&output, &film.image(), &opts, &layers)?;
+        Ok(())
+    };
+    let mut last_partial = Instant::now();
+    let mut after_pass = |film: &Film, next: &[u32]| -> Result<(), Error> {
+        if let Some(every) = a.write_partial {
+            if last_partial.elapsed() >= every && !CANCEL.load(Ordering::SeqCst) {
+                write_output(film)?;
+                if a.checkpoint.is_some() {
+                    save_checkpoint(film, next)?;
+                }
+                last_partial = Instant::now();
+            }
+        }
+        Ok(())
+    };
+    let outcome = mcrt::progressive::render_progressive(
+        &scene,
+        &settings,
+        &mut film,
+        &mut next,
+        &budget,
+        &CANCEL,
+        &mut after_pass,
+        &|n| bar.inc(n),
+    )?;
+    bar.finish_and_clear();
+    let interrupted = outcome.stop == Stop::Interrupted;
+    write_output(&film)?;
+    if interrupted || a.checkpoint.is_some() {
+        save_checkpoint(&film, &next)?;
+    }
+    let stats = &outcome.stats;
+    if !a.quiet {
+        let secs = stats.elapsed.as_secs_f64().max(1e-9);
+        let rays = stats.rays.rays + stats.rays.shadow_rays;
+        let (lo, hi) = (
+            next.iter().copied().min().unwrap_or(0),
+            next.iter().copied().max().unwrap_or(0),
+        );
+        let spp = if lo == hi {
+            format!("{lo} spp")
+        } else {
+            format!(
+                "{lo}–{hi} spp (mean {:.1})",
+                next.iter().map(|&n| n as f64).sum::<f64>() / npix.max(1) as f64
+            )
+        };
+        eprintln!(
+            "{}: {}x{} at {spp}{} ({}, {} primitives, {} lights, loaded in {:.2} s) in {:.2} s, {} pass{}: {:.2} M samples/s, {:.2} M rays/s ({:.2} M shadow rays/s); stopped: {}{}",
+            output.display(),
+            fw,
+            fh,
+            if a.resume.is_some() { format!(", resumed from {resumed_from} spp") } else { String::new() },
+            settings.params.kind.name(),
+            scene.prims.len(),
+            scene.lights.lights.len() + scene.lights.others.len(),
+            load_time.as_secs_f64(),
+            secs,
+            outcome.passes,
+            if outcome.passes == 1 { "" } else { "es" },
+            stats.samples as f64 / secs / 1e6,
+            rays as f64 / secs / 1e6,
+            stats.rays.shadow_rays as f64 / secs / 1e6,
+            outcome.stop,
+            match (outcome.noise, outcome.stop) {
+                (Some(e), Stop::Spp | Stop::Time | Stop::Interrupted) => format!(" (relative error {e:.4})"),
+                _ => String::new(),
+            }
+        );
+        if interrupted || a.checkpoint.is_some() {
+            eprintln!(
+                "checkpoint: {} (continue with --resume {})",
+                checkpoint_path.display(),
+                checkpoint_path.display()
+            );
+        }
+        warn_dropped(stats);
+    }
+    Ok(if interrupted { INTERRUPTED } else { 0 })
+}
+
+fn warn_dropped(stats: &mcrt::render::RenderStats) {
+    if stats.dropped > 0 {
+        let (x, y) = stats.first_dropped.unwrap_or_default();
+        eprintln!(
+            "warning: {} samples were NaN or infinite and were dropped (first at pixel {x}, {y})",
+            stats.dropped
+        );
+    }
+}
+
+/// `--pass K/N`: one share of the samples, written as a sums file.
+#[allow(clippy::too_many_arguments)]
+fn render_pass(
+    a: &RenderArgs,
+    scene: &Scene,
+    settings: &mcrt::render::RenderSettings,
+    pass: Pass,
+    output: &std::path::Path,
+    scene_bytes: &[u8],
+    extra: &str,
+    load_time: std::time::Duration,
+) -> Result<i32, Error> {
+    let (_, _, fw, fh) = settings.window();
+    let total = fw as u64 * fh as u64 * pass.share(settings.spp).1 as u64;
     let show = !a.quiet && std::io::stderr().is_terminal();
     let bar = if show {
         let b = ProgressBar::new(total);
@@ -399,44 +685,21 @@ fn render(a: RenderArgs) -> Result<(), Error> {
     } else {
         ProgressBar::hidden()
     };
-    let (film, stats) = match settings.params.kind {
-        // Photon maps are traced for the whole image: no sample passes.
-        IntegratorKind::Photon | IntegratorKind::Sppm => {
-            mcrt::render::render(&scene, &settings, &|n| bar.inc(n))?
-        }
-        _ => {
-            let pass = a.pass.unwrap_or(Pass { k: 1, n: 1 });
-            parts::render_pass(&scene, &settings, pass, &|n| bar.inc(n))?
-        }
-    };
+    let (film, stats) = parts::render_pass(scene, settings, pass, &|n| bar.inc(n))?;
     bar.finish_and_clear();
-
-    match a.pass {
-        Some(pass) => {
-            let bytes = std::fs::read(&a.scene).unwrap_or_default();
-            let extra = format!("defines={:?} lenient={}", a.define, a.lenient);
-            let meta = parts::PartMeta::new(&a.scene, &bytes, &extra, &settings, pass);
-            parts::write_part(&output, &parts::Part { meta, film })?;
-        }
-        None => write_image(&output, &film.image(), &a.image.options())?,
-    }
+    let meta = parts::PartMeta::new(&a.scene, scene_bytes, extra, settings, pass);
+    parts::write_part(output, &parts::Part { meta, film })?;
     if !a.quiet {
         let secs = stats.elapsed.as_secs_f64().max(1e-9);
         let rays = stats.rays.rays + stats.rays.shadow_rays;
+        let (first, count) = pass.share(settings.spp);
         eprintln!(
-            "{}: {}x{} at {} {}{} ({}, {} primitives, {} lights, loaded in {:.2} s) in {:.2} s: {:.2} M samples/s, {:.2} M rays/s ({:.2} M shadow rays/s)",
+            "{}: {}x{} at {} spp, pass {pass}: samples {first}..{} ({}, {} primitives, {} lights, loaded in {:.2} s) in {:.2} s: {:.2} M samples/s, {:.2} M rays/s ({:.2} M shadow rays/s)",
             output.display(),
             fw,
             fh,
-            if settings.params.kind == IntegratorKind::Sppm { settings.params.photon.iterations } else { settings.spp },
-            if settings.params.kind == IntegratorKind::Sppm { "iterations" } else { "spp" },
-            match a.pass {
-                Some(p) => {
-                    let (first, count) = p.share(settings.spp);
-                    format!(", pass {p}: samples {first}..{}", first + count)
-                }
-                None => String::new(),
-            },
+            settings.spp,
+            first + count,
             settings.params.kind.name(),
             scene.prims.len(),
             scene.lights.lights.len() + scene.lights.others.len(),
@@ -446,21 +709,9 @@ fn render(a: RenderArgs) -> Result<(), Error> {
             rays as f64 / secs / 1e6,
             stats.rays.shadow_rays as f64 / secs / 1e6,
         );
-        if stats.photons_stored > 0 {
-            eprintln!(
-                "photon maps: {} photons stored ({:.1} MB, {} bytes each), traced and built in {:.2} s",
-                stats.photons_stored,
-                stats.photon_bytes as f64 / 1e6,
-                std::mem::size_of::<mcrt::photon::Photon>(),
-                stats.photon_time.as_secs_f64()
-            );
-        }
-        if stats.dropped > 0 {
-            let (x, y) = stats.first_dropped.unwrap_or_default();
-            eprintln!("warning: {} samples were NaN or infinite and were dropped (first at pixel {x}, {y})", stats.dropped);
-        }
+        warn_dropped(&stats);
     }
-    Ok(())
+    Ok(0)
 }
 
 fn merge(a: MergeArgs) -> Result<(), Error> {
@@ -525,6 +776,80 @@ fn compare(a: CompareArgs) -> Result<(), Error> {
         );
     }
     Ok(())
+}
+
+/// `photon` and `sppm`: the photon maps are traced for the whole image, so these render in
+/// one go (no sample passes, budgets, checkpoints or AOVs).
+fn render_photon(
+    a: &RenderArgs,
+    scene: &Scene,
+    settings: &mcrt::render::RenderSettings,
+    output: &std::path::Path,
+    load_time: std::time::Duration,
+) -> Result<i32, Error> {
+    if a.pass.is_some()
+        || a.time.is_some()
+        || a.target_noise.is_some()
+        || a.resume.is_some()
+        || a.write_partial.is_some()
+        || a.aov.is_some()
+    {
+        return Err(Error::Usage(format!(
+            "--integrator {} renders the whole image at once: --pass, --time, --target-noise, \
+             --resume, --write-partial and --aov apply to path and direct",
+            settings.params.kind.name()
+        )));
+    }
+    let (_, _, fw, fh) = settings.window();
+    let passes = match settings.params.kind {
+        IntegratorKind::Sppm => settings.params.photon.iterations,
+        _ => settings.spp,
+    };
+    let show = !a.quiet && std::io::stderr().is_terminal();
+    let bar = if show {
+        let b = ProgressBar::new(fw as u64 * fh as u64 * passes as u64);
+        b.set_style(
+            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}%  {human_pos}/{human_len} samples  {per_sec}  ETA {eta}")
+                .unwrap(),
+        );
+        b
+    } else {
+        ProgressBar::hidden()
+    };
+    let (film, stats) = mcrt::render::render(scene, settings, &|n| bar.inc(n))?;
+    bar.finish_and_clear();
+    write_image(output, &film.image(), &a.image.options())?;
+    if !a.quiet {
+        let secs = stats.elapsed.as_secs_f64().max(1e-9);
+        let rays = stats.rays.rays + stats.rays.shadow_rays;
+        eprintln!(
+            "{}: {}x{} at {} {} ({}, {} primitives, {} lights, loaded in {:.2} s) in {:.2} s: {:.2} M samples/s, {:.2} M rays/s ({:.2} M shadow rays/s)",
+            output.display(),
+            fw,
+            fh,
+            passes,
+            if settings.params.kind == IntegratorKind::Sppm { "iterations" } else { "spp" },
+            settings.params.kind.name(),
+            scene.prims.len(),
+            scene.lights.lights.len() + scene.lights.others.len(),
+            load_time.as_secs_f64(),
+            secs,
+            stats.samples as f64 / secs / 1e6,
+            rays as f64 / secs / 1e6,
+            stats.rays.shadow_rays as f64 / secs / 1e6,
+        );
+        if stats.photons_stored > 0 {
+            eprintln!(
+                "photon maps: {} photons stored ({:.1} MB, {} bytes each), traced and built in {:.2} s",
+                stats.photons_stored,
+                stats.photon_bytes as f64 / 1e6,
+                std::mem::size_of::<mcrt::photon::Photon>(),
+                stats.photon_time.as_secs_f64()
+            );
+        }
+        warn_dropped(&stats);
+    }
+    Ok(0)
 }
 
 fn photons(a: PhotonsArgs) -> Result<(), Error> {

@@ -267,10 +267,19 @@ const CHANNELS: [&str; 3] = ["R", "G", "B"];
 
 /// Writes a sums file atomically (temporary file + rename).
 pub fn write_part(path: &Path, part: &Part) -> Result<(), ImageError> {
-    write_atomic(path, |tmp| write_part_exr(tmp, part))
+    write_part_with(path, part, &[])
 }
 
-fn write_part_exr(path: &Path, part: &Part) -> Result<(), String> {
+/// Writes a sums file with extra u32 channels (name, one value per pixel), atomically.
+pub fn write_part_with(
+    path: &Path,
+    part: &Part,
+    extra: &[(&str, &[u32])],
+) -> Result<(), ImageError> {
+    write_atomic(path, |tmp| write_part_exr(tmp, part, extra))
+}
+
+fn write_part_exr(path: &Path, part: &Part, extra: &[(&str, &[u32])]) -> Result<(), String> {
     use exr::prelude::*;
     let f = &part.film;
     let (w, h) = (f.width as usize, f.height as usize);
@@ -299,6 +308,12 @@ fn write_part_exr(path: &Path, part: &Part) -> Result<(), String> {
         }
     }
     channels.push(AnyChannel::new("count", FlatSamples::U32(f.count.clone())));
+    for (name, v) in extra {
+        if v.len() != w * h {
+            return Err(format!("channel '{name}' does not have the film's size"));
+        }
+        channels.push(AnyChannel::new(*name, FlatSamples::U32(v.to_vec())));
+    }
     let mut attrs = LayerAttributes::named(LAYER);
     attrs.other.insert(
         Text::from(ATTRIBUTE),
@@ -318,6 +333,14 @@ fn write_part_exr(path: &Path, part: &Part) -> Result<(), String> {
 
 /// Reads a sums file written by [`write_part`].
 pub fn read_part(path: &Path) -> std::result::Result<Part, PartsError> {
+    Ok(read_part_with(path, &[])?.0)
+}
+
+/// Reads a sums file and the extra u32 channels `extra` (each required).
+pub fn read_part_with(
+    path: &Path,
+    extra: &[&str],
+) -> std::result::Result<(Part, Vec<Vec<u32>>), PartsError> {
     use exr::prelude::*;
     let err = |message: String| PartsError::Read {
         path: path.to_path_buf(),
@@ -382,7 +405,11 @@ pub fn read_part(path: &Path) -> std::result::Result<Part, PartsError> {
         }
     }
     film.count.copy_from_slice(channel("count")?);
-    Ok(Part { meta, film })
+    let mut more = Vec::with_capacity(extra.len());
+    for name in extra {
+        more.push(channel(name)?.clone());
+    }
+    Ok((Part { meta, film }, more))
 }
 
 /// Merges the parts of one render: checks that they agree (scene, settings, seed, spp, size,

@@ -53,6 +53,25 @@ pub struct RenderStats {
     pub photons_stored: u64,
     pub photon_bytes: u64,
     pub photon_time: Duration,
+    /// Tiles skipped because the render was told to stop ([`render_ranges`]).
+    pub skipped_tiles: u64,
+}
+
+impl RenderStats {
+    /// Adds the counts of a later call (elapsed times add up).
+    pub fn add(&mut self, o: &RenderStats) {
+        self.elapsed += o.elapsed;
+        self.samples += o.samples;
+        self.rays.add(&o.rays);
+        self.dropped += o.dropped;
+        if self.first_dropped.is_none() {
+            self.first_dropped = o.first_dropped;
+        }
+        self.skipped_tiles += o.skipped_tiles;
+        self.photons_stored += o.photons_stored;
+        self.photon_bytes += o.photon_bytes;
+        self.photon_time += o.photon_time;
+    }
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -106,29 +125,106 @@ pub fn render_samples_with(
     progress: &(dyn Fn(u64) + Sync),
     li: &LiFn,
 ) -> Result<RenderStats, RenderError> {
+    let mut next = vec![first; film.count.len()];
+    render_ranges_with(
+        scene,
+        s,
+        film,
+        &mut next,
+        &|_| first + count,
+        &|| false,
+        progress,
+        li,
+    )
+}
+
+/// Runs `work` on `s.threads` worker threads (or rayon's global pool).
+pub fn with_threads<R: Send>(
+    s: &RenderSettings,
+    work: impl FnOnce() -> R + Send,
+) -> Result<R, RenderError> {
+    match s.threads {
+        Some(t) => Ok(rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build()
+            .map_err(|e| RenderError::Threads(e.to_string()))?
+            .install(work)),
+        None => Ok(work()),
+    }
+}
+
+/// Renders, for each pixel i of the film (row-major), samples [next[i], until(i)) and sets
+/// next[i] = until(i) (nothing where until(i) ≤ next[i]). Each pixel's samples are added in
+/// index order to its running sums, and a sample's value depends only on (seed, pixel, index),
+/// so the film after any sequence of calls that leaves pixel i at next[i] = n holds exactly
+/// samples [0, n) of it, bit for bit, however they were split.
+///
+/// `stop` is asked before each tile: once it returns true, the tiles not yet started are
+/// skipped (their pixels keep their `next`), so an abandoned call leaves the film and `next`
+/// consistent — every pixel holds a prefix of its sample sequence. `stats.skipped_tiles`
+/// counts them.
+pub fn render_ranges(
+    scene: &Scene,
+    s: &RenderSettings,
+    film: &mut Film,
+    next: &mut [u32],
+    until: &(dyn Fn(usize) -> u32 + Sync),
+    stop: &(dyn Fn() -> bool + Sync),
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<RenderStats, RenderError> {
+    let li = |ray: Ray, sampler: &mut Sampler, stats: &mut RayStats| {
+        integrator::li(scene, ray, sampler, &s.params, stats)
+    };
+    render_ranges_with(scene, s, film, next, until, stop, progress, &li)
+}
+
+/// [`render_ranges`] with the radiance given by `li`.
+#[allow(clippy::too_many_arguments)]
+pub fn render_ranges_with(
+    scene: &Scene,
+    s: &RenderSettings,
+    film: &mut Film,
+    next: &mut [u32],
+    until: &(dyn Fn(usize) -> u32 + Sync),
+    stop: &(dyn Fn() -> bool + Sync),
+    progress: &(dyn Fn(u64) + Sync),
+    li: &LiFn,
+) -> Result<RenderStats, RenderError> {
     let camera = camera_for(scene, s)?;
     let (ox, oy, fw, fh) = s.window();
+    assert_eq!(next.len(), fw as usize * fh as usize);
+    assert_eq!((film.width, film.height), (fw, fh));
     let tiles_x = fw.div_ceil(TILE);
     let tiles_y = fh.div_ceil(TILE);
     let start = Instant::now();
-    let shared = Mutex::new((film, RenderStats::default()));
+    let shared = Mutex::new((film, next, RenderStats::default()));
     let work = || {
         (0..tiles_x * tiles_y).into_par_iter().for_each(|t| {
             let (tx, ty) = (t % tiles_x, t / tiles_x);
             let (x0, y0) = (tx * TILE, ty * TILE);
             let (x1, y1) = ((x0 + TILE).min(fw), (y0 + TILE).min(fh));
+            let index = |x: u32, y: u32| (y * fw + x) as usize;
+            if stop() {
+                shared.lock().unwrap().2.skipped_tiles += 1;
+                return;
+            }
             // Continue each pixel's running sums from the film, so that rendering samples in
             // several passes adds them in exactly the order one pass would: the result is the
             // same bits however the samples are split (tiles never share pixels).
-            let mut sums: Vec<PixelSums> = {
+            let (mut sums, ranges): (Vec<PixelSums>, Vec<(u32, u32)>) = {
                 let g = shared.lock().unwrap();
                 (y0..y1)
                     .flat_map(|y| (x0..x1).map(move |x| (x, y)))
-                    .map(|(x, y)| g.0.pixel(x, y))
-                    .collect()
+                    .map(|(x, y)| {
+                        let i = index(x, y);
+                        let a = g.1[i];
+                        (g.0.pixel(x, y), (a, until(i).max(a)))
+                    })
+                    .unzip()
             };
             let mut stats = RenderStats::default();
             let mut k = 0;
+            let mut n = 0u64;
             for y in y0..y1 {
                 for x in x0..x1 {
                     // Random numbers follow the pixel of the full image, so a crop renders
@@ -136,8 +232,10 @@ pub fn render_samples_with(
                     let (gx, gy) = (x + ox, y + oy);
                     let pixel = gy as u64 * s.width as u64 + gx as u64;
                     let px = &mut sums[k];
+                    let (a, b) = ranges[k];
                     k += 1;
-                    for i in first..first + count {
+                    n += (b - a) as u64;
+                    for i in a..b {
                         let mut sampler = Sampler::for_sample(s.sampler, s.seed, pixel, i as u64);
                         let ray = camera.generate_ray(gx, gy, sampler.next_2d());
                         let l = li(ray, &mut sampler, &mut stats.rays);
@@ -150,14 +248,14 @@ pub fn render_samples_with(
                     }
                 }
             }
-            let n = ((x1 - x0) * (y1 - y0)) as u64 * count as u64;
             {
                 let mut g = shared.lock().unwrap();
-                let (film, total) = &mut *g;
+                let (film, next, total) = &mut *g;
                 let mut k = 0;
                 for y in y0..y1 {
                     for x in x0..x1 {
                         film.set_pixel(x, y, &sums[k]);
+                        next[index(x, y)] = ranges[k].1;
                         k += 1;
                     }
                 }
@@ -174,15 +272,8 @@ pub fn render_samples_with(
             progress(n);
         });
     };
-    match s.threads {
-        Some(t) => rayon::ThreadPoolBuilder::new()
-            .num_threads(t)
-            .build()
-            .map_err(|e| RenderError::Threads(e.to_string()))?
-            .install(work),
-        None => work(),
-    }
-    let (_, mut stats) = shared.into_inner().unwrap();
+    with_threads(s, work)?;
+    let (_, _, mut stats) = shared.into_inner().unwrap();
     stats.elapsed = start.elapsed();
     Ok(stats)
 }

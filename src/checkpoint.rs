@@ -1,0 +1,132 @@
+//! Checkpoints: the state of an unfinished render, to continue it with `--resume`.
+//!
+//! A checkpoint is a sums file ([`crate::parts`]) of pass 1/1 with one more u32 channel,
+//! `next`: for each pixel, the number of samples rendered so far (its samples [0, next) are
+//! in the sums; `count` can be smaller where NaN or infinite samples were dropped). Its
+//! metadata says `spp` = the largest `next` and `samples=0..` the smallest, so a checkpoint in
+//! which every pixel got the same number of samples is also a complete sums file that `mcrt
+//! merge` accepts. Resuming continues every pixel from its own `next`; since a sample depends
+//! only on (seed, pixel, index) and the sums are exact integers, an interrupted and resumed
+//! render equals the uninterrupted one bit for bit.
+
+use crate::film::Film;
+use crate::image::ImageError;
+use crate::parts::{self, Part, PartMeta, PartsError, Pass};
+use crate::render::RenderSettings;
+use std::path::{Path, PathBuf};
+
+/// Name of the per-pixel sample-index channel.
+pub const NEXT: &str = "next";
+
+#[derive(Clone, Debug)]
+pub struct Checkpoint {
+    pub meta: PartMeta,
+    pub film: Film,
+    /// Samples rendered per pixel, row-major over the film.
+    pub next: Vec<u32>,
+}
+
+/// The default checkpoint path of an output image: `DIR/STEM.checkpoint.exr`.
+pub fn default_path(output: &Path) -> PathBuf {
+    let stem = output
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    output.with_file_name(format!("{stem}.checkpoint.exr"))
+}
+
+impl Checkpoint {
+    /// A checkpoint of `film`/`next`, rendered with settings `s` from the scene file whose
+    /// bytes are `scene_bytes` (`extra` as for [`PartMeta::new`]).
+    pub fn new(
+        scene: &Path,
+        scene_bytes: &[u8],
+        extra: &str,
+        s: &RenderSettings,
+        film: Film,
+        next: Vec<u32>,
+    ) -> Checkpoint {
+        let lo = next.iter().copied().min().unwrap_or(0);
+        let hi = next.iter().copied().max().unwrap_or(0);
+        let mut meta = PartMeta::new(scene, scene_bytes, extra, s, Pass { k: 1, n: 1 });
+        meta.spp = hi;
+        meta.first = 0;
+        meta.count = lo;
+        Checkpoint { meta, film, next }
+    }
+
+    /// Checks that this checkpoint continues the render described by `now` (the metadata
+    /// [`Checkpoint::new`] would give the resuming render): same mcrt version, scene file
+    /// bytes, settings, image size, crop and seed. The spp may differ.
+    pub fn check_matches(&self, path: &Path, now: &PartMeta) -> Result<(), PartsError> {
+        let m = &self.meta;
+        let differ = |what: &str, a: String, b: String| {
+            PartsError::Mismatch(format!(
+                "{}: the checkpoint is of another render: {what} {a} in the checkpoint, {b} now",
+                path.display()
+            ))
+        };
+        if m.version != now.version {
+            return Err(differ(
+                "mcrt version",
+                m.version.clone(),
+                now.version.clone(),
+            ));
+        }
+        if m.scene_hash != now.scene_hash {
+            return Err(differ(
+                "scene file",
+                format!("{} (hash {})", m.scene, m.scene_hash),
+                format!("{} (hash {})", now.scene, now.scene_hash),
+            ));
+        }
+        if (m.width, m.height, m.crop) != (now.width, now.height, now.crop) {
+            let size = |m: &PartMeta| match m.crop {
+                Some([x, y, w, h]) => format!("{} × {} crop {x},{y},{w},{h}", m.width, m.height),
+                None => format!("{} × {}", m.width, m.height),
+            };
+            return Err(differ("image size", size(m), size(now)));
+        }
+        if m.seed != now.seed {
+            return Err(differ("seed", m.seed.to_string(), now.seed.to_string()));
+        }
+        if m.settings != now.settings {
+            return Err(differ("settings", m.settings.clone(), now.settings.clone()));
+        }
+        Ok(())
+    }
+}
+
+/// Writes a checkpoint atomically (temporary file + rename).
+pub fn write_checkpoint(path: &Path, c: &Checkpoint) -> Result<(), ImageError> {
+    let part = Part {
+        meta: c.meta.clone(),
+        film: c.film.clone(),
+    };
+    parts::write_part_with(path, &part, &[(NEXT, &c.next)])
+}
+
+/// Reads a checkpoint written by [`write_checkpoint`].
+pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, PartsError> {
+    let (part, mut more) = parts::read_part_with(path, &[NEXT]).map_err(|e| match e {
+        PartsError::Read { path, message } if message.contains("no channel 'next'") => {
+            PartsError::Read {
+                path,
+                message: "not a checkpoint (no 'next' channel): a sums file of `--pass`?".into(),
+            }
+        }
+        e => e,
+    })?;
+    let next = more.remove(0);
+    if next.iter().zip(&part.film.count).any(|(n, c)| c > n) {
+        return Err(PartsError::Read {
+            path: path.to_path_buf(),
+            message: "a pixel's count exceeds its samples rendered".into(),
+        });
+    }
+    Ok(Checkpoint {
+        meta: part.meta,
+        film: part.film,
+        next,
+    })
+}
