@@ -1,5 +1,5 @@
-//! The caustic mask of the TNCG15 room's eye-1 view (a copy of the one in tests/reference.rs,
-//! shared with tests/photon.rs).
+//! The caustic mask of the TNCG15 room's eye-1 view, shared by tests/reference.rs and
+//! tests/photon.rs.
 #![allow(dead_code)]
 
 use glam::Vec2;
