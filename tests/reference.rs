@@ -10,7 +10,6 @@ use glam::{Vec2, Vec3};
 use mcrt::camera::{CameraDesc, FovAxis};
 use mcrt::render::RenderSettings;
 use mcrt::scene::desc::FileSettings;
-use mcrt::scene::Scene;
 
 /// z-score above which a block fails: with a few hundred blocks, P(|Z| > 5) ≈ 6e-7 each.
 const Z: f64 = 5.0;
