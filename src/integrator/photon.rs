@@ -7,14 +7,18 @@
 //! - caustics (light reaching the point by mirrors and glass only), from the caustic map: the
 //!   k nearest photons with a cone filter;
 //! - the rest of the indirect light, by final gathering: BSDF-sampled rays whose first
-//!   non-specular hit takes its reflected radiance from the global map.
+//!   non-specular hit takes its reflected radiance from the global map: on Lambertian
+//!   surfaces ρ/π times the nearest precomputed irradiance point's E (Christensen 1999),
+//!   one nearest-neighbour lookup instead of a k-nearest estimate.
 //!
 //! Biased (density estimation blurs), consistent as the photon counts grow.
 
 use super::{IntegratorParams, RayStats};
 use crate::geometry::{Frame, Ray};
 use crate::material::{Material, TransportMode};
-use crate::photon::{radiance_estimate, visibility, PhotonMaps, ShadingPoint, Visibility};
+use crate::photon::{
+    precomputed_radiance, radiance_estimate, visibility, PhotonMaps, ShadingPoint, Visibility,
+};
 use crate::sampler::Sampler;
 use crate::scene::{Interaction, Scene};
 use crate::Color;
@@ -40,7 +44,7 @@ impl<'a> PhotonContext<'a> {
         let d = crate::photon::scene_diagonal(scene);
         PhotonContext {
             maps,
-            r_global: 0.1 * d,
+            r_global: crate::photon::GLOBAL_RADIUS * d,
             r_caustic: 0.05 * d,
             r_shadow: 0.02 * d,
             use_shadow_photons: scene.lights.others.is_empty(),
@@ -224,9 +228,16 @@ pub fn li(
                 wo_world: -gray.d,
                 material: &my,
             };
-            sum += bs.weight
-                * gbeta
-                * radiance_estimate(&ctx.maps.global, &spy, k, ctx.r_global, max_depth - s - g);
+            let depth_left = max_depth - s - g;
+            let lo = if depth_left >= crate::photon::photon::MAX_DEPTH {
+                precomputed_radiance(&ctx.maps.irradiance, &spy, ctx.r_global)
+            } else {
+                None
+            };
+            let lo = lo.unwrap_or_else(|| {
+                radiance_estimate(&ctx.maps.global, &spy, k, ctx.r_global, depth_left)
+            });
+            sum += bs.weight * gbeta * lo;
         }
         l += beta * sum / n as f32;
     }

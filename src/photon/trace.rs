@@ -35,6 +35,9 @@ pub struct TraceOptions {
     /// Also record shadow photons: the continuation of each photon's first segment through
     /// the surfaces behind the first hit.
     pub shadow: bool,
+    /// Also record each stored photon's surface normal (on the side it arrived from), in
+    /// `Traced::normals`: the global pass's irradiance points need it.
+    pub normals: bool,
 }
 
 impl Default for TraceOptions {
@@ -46,6 +49,7 @@ impl Default for TraceOptions {
             caustic_only: false,
             min_depth: 1,
             shadow: false,
+            normals: false,
         }
     }
 }
@@ -54,6 +58,8 @@ impl Default for TraceOptions {
 pub struct Traced {
     pub photons: Vec<Photon>,
     pub shadow: Vec<Photon>,
+    /// With `TraceOptions::normals`: the normal at each of `photons`, same order.
+    pub normals: Vec<glam::Vec3A>,
     /// Photons emitted (the powers are normalised by it).
     pub emitted: u64,
     pub rays: u64,
@@ -95,12 +101,14 @@ pub fn trace_photons(scene: &Scene, n: u64, o: &TraceOptions) -> Traced {
     let mut out = Traced {
         photons: Vec::with_capacity(total),
         shadow: Vec::with_capacity(total_shadow),
+        normals: Vec::new(),
         emitted: n,
         rays: 0,
     };
     for p in parts {
         out.photons.extend_from_slice(&p.photons);
         out.shadow.extend_from_slice(&p.shadow);
+        out.normals.extend_from_slice(&p.normals);
         out.rays += p.rays;
     }
     out
@@ -155,6 +163,14 @@ fn trace_one(
             if depth >= o.min_depth && (!o.caustic_only || caustic) {
                 t.photons
                     .push(Photon::new(si.p, power, -ray.d, depth, caustic));
+                if o.normals {
+                    let n = if si.ng.dot(ray.d) < 0.0 {
+                        si.ng
+                    } else {
+                        -si.ng
+                    };
+                    t.normals.push(n);
+                }
             }
             if o.caustic_only {
                 break;
