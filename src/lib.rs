@@ -5,6 +5,9 @@
 //! [`scene::Scene`] (primitives, BVH, materials, lights, cameras) → integrator over image
 //! tiles → [`film::Film`] → image file.
 
+// `!(x > 0.0)` is used on purpose: it refuses NaN together with the non-positive values.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod accel;
 pub mod aov;
 pub mod camera;

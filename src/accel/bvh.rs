@@ -198,6 +198,7 @@ fn build_node(
     };
     for r in refs.iter() {
         let b = bin_of(r.centroid);
+        #[allow(clippy::needless_range_loop)] // three parallel arrays indexed by axis
         for axis in 0..3 {
             bins.count[axis][b[axis]] += 1;
             bins.bounds[axis][b[axis]].grow(&r.bounds);

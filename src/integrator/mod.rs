@@ -162,6 +162,7 @@ pub fn li(
 /// and one BSDF sample, Veach's multi-sample estimator (thesis eq. 9.10) gives each light
 /// sample the weight w = (n·p_light)² / ((n·p_light)² + p_bsdf²) and divides the sum by n.
 #[inline]
+#[allow(clippy::too_many_arguments)] // the hot path: plain arguments, no context struct
 pub(crate) fn sample_lights(
     scene: &Scene,
     si: &Interaction,
