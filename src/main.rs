@@ -882,10 +882,10 @@ fn photons(a: PhotonsArgs) -> Result<(), Error> {
     mcrt::check_memory(&settings)?;
     let scene = Scene::build(desc);
     let s = &settings;
-    let maps = mcrt::render::in_pool(s, || {
+    let maps = mcrt::render::with_threads(s, || {
         mcrt::photon::PhotonMaps::build(&scene, &s.params, s.seed)
     })?;
-    let img = mcrt::render::in_pool(s, || {
+    let img = mcrt::render::with_threads(s, || {
         mcrt::photon::visualize::draw_photons(&scene, s, &maps)
     })??;
     write_image(&a.output, &img, &WriteOptions::default())?;

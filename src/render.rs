@@ -292,7 +292,7 @@ pub fn render(
         }
         IntegratorKind::Photon => {
             camera_for(scene, s)?;
-            let maps = in_pool(s, || PhotonMaps::build(scene, &s.params, s.seed))?;
+            let maps = with_threads(s, || PhotonMaps::build(scene, &s.params, s.seed))?;
             let ctx = integrator::photon::PhotonContext::new(scene, &maps);
             let li = |ray: Ray, sampler: &mut Sampler, stats: &mut RayStats| {
                 integrator::photon::li(scene, &ctx, ray, sampler, &s.params, stats)
@@ -309,19 +309,4 @@ pub fn render(
         _ => render_samples(scene, s, &mut film, 0, s.spp, progress)?,
     };
     Ok((film, stats))
-}
-
-/// Runs `f` on the settings' thread count.
-pub fn in_pool<T: Send>(
-    s: &RenderSettings,
-    f: impl FnOnce() -> T + Send,
-) -> Result<T, RenderError> {
-    match s.threads {
-        Some(t) => Ok(rayon::ThreadPoolBuilder::new()
-            .num_threads(t)
-            .build()
-            .map_err(|e| RenderError::Threads(e.to_string()))?
-            .install(f)),
-        None => Ok(f()),
-    }
 }

@@ -188,7 +188,8 @@ fn photon_maps_and_images_are_deterministic() {
         for t in [1, 2] {
             s.threads = Some(t);
             let maps =
-                mcrt::render::in_pool(&s, || PhotonMaps::build(&scene, &s.params, s.seed)).unwrap();
+                mcrt::render::with_threads(&s, || PhotonMaps::build(&scene, &s.params, s.seed))
+                    .unwrap();
             let (film, _) = mcrt::render::render(&scene, &s, &|_| {}).unwrap();
             images.push((
                 maps.global.photons().to_vec(),

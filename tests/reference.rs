@@ -11,29 +11,6 @@ use mcrt::camera::{CameraDesc, FovAxis};
 use mcrt::render::RenderSettings;
 use mcrt::scene::desc::FileSettings;
 
-/// z-score above which a block fails: with a few hundred blocks, P(|Z| > 5) ≈ 6e-7 each.
-const Z: f64 = 5.0;
-
-fn check(name: &str, c: &BlockComparison) {
-    let out = c.outliers(Z);
-    eprintln!(
-        "{name}: {} blocks, max z {:.2}, aggregate z {:.2}, max rel err {:.2} %",
-        c.mine.len(),
-        c.max_z(),
-        c.aggregate_z(),
-        100.0 * (0..c.mine.len()).map(|i| c.rel_err(i)).fold(0.0, f64::max)
-    );
-    if !out.is_empty() {
-        c.print();
-    }
-    assert!(out.is_empty(), "{name}: blocks beyond {Z} sigma: {out:?}");
-    assert!(
-        c.aggregate_z().abs() < Z,
-        "{name}: the image as a whole is biased: aggregate z {:.2}",
-        c.aggregate_z()
-    );
-}
-
 /// Renders a scene file's camera at 128×128 and 256 spp and checks it against a 256×256
 /// reference made with `ref_spp` samples.
 fn matches_mitsuba(
@@ -52,10 +29,8 @@ fn matches_mitsuba(
     };
     let s = settings(&fs, over);
     let r = render_with(&scene, &s);
-    check(
-        &format!("{scene_file} {}", camera.unwrap_or("")),
-        &BlockComparison::new(&r, &reference(reference_file), 16, ref_spp),
-    );
+    BlockComparison::new(&r, &reference(reference_file), 16, ref_spp)
+        .assert_within_noise(&format!("{scene_file} {}", camera.unwrap_or("")));
     s
 }
 
@@ -182,7 +157,7 @@ fn tncg15_full_resolution(spp: u32) -> (BlockComparison, Vec<bool>, f64) {
             mask[i]
         );
     }
-    check(&format!("tncg15 eye1 {spp} spp"), &c);
+    c.assert_within_noise(&format!("tncg15 eye1 {spp} spp"));
     let worst = (0..c.mine.len())
         .filter(|&i| !mask[i])
         .map(|i| c.rel_err(i))

@@ -9,43 +9,19 @@ mod common;
 use common::*;
 use mcrt::camera::CameraDesc;
 use mcrt::geometry::mesh::TriangleMesh;
-use mcrt::scene::desc::{FileSettings, GeometryDesc, SceneDesc};
-
-/// z-score above which a block fails (a few hundred blocks in all: P(|Z| > 5) ≈ 6e-7 each).
-const Z: f64 = 5.0;
+use mcrt::scene::desc::{GeometryDesc, SceneDesc};
 
 fn desc(rel: &str) -> SceneDesc {
     mcrt::load_scene(&project_path(rel)).expect("scene loads")
 }
 
-/// Renders a TOML twin at its own resolution with `spp` and compares 8×8 blocks with the
-/// XML scene's Mitsuba reference (made with `ref_spp`).
+/// Renders the scene `tests/data/toml/{name}.toml` and compares it with the reference `{name}.exr`.
 fn twin_matches_mitsuba(name: &str, spp: u32, ref_spp: u32) {
-    let (scene, fs) = load(&format!("tests/data/toml/{name}.toml"));
-    let s = settings(
-        &fs,
-        FileSettings {
-            spp: Some(spp),
-            ..Default::default()
-        },
-    );
-    let r = render_with(&scene, &s);
-    let c = BlockComparison::new(&r, &reference(&format!("{name}.exr")), 8, ref_spp);
-    eprintln!(
-        "{name}.toml: {} blocks, max z {:.2}, aggregate z {:.2}",
-        c.mine.len(),
-        c.max_z(),
-        c.aggregate_z()
-    );
-    let out = c.outliers(Z);
-    if !out.is_empty() {
-        c.print();
-    }
-    assert!(out.is_empty(), "{name}: blocks beyond {Z} sigma: {out:?}");
-    assert!(
-        c.aggregate_z().abs() < Z,
-        "{name}: biased overall, aggregate z {:.2}",
-        c.aggregate_z()
+    file_matches_reference(
+        &format!("tests/data/toml/{name}.toml"),
+        spp,
+        &format!("{name}.exr"),
+        ref_spp,
     );
 }
 

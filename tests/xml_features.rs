@@ -5,39 +5,14 @@
 mod common;
 
 use common::*;
-use mcrt::scene::desc::FileSettings;
 
-/// z-score above which a block fails (a few hundred blocks in all: P(|Z| > 5) ≈ 6e-7 each).
-const Z: f64 = 5.0;
-
-/// Renders an XML feature scene at its own resolution with `spp` and compares 8×8 blocks
-/// with the reference (made with `ref_spp`).
+/// Renders the scene `tests/data/mitsuba/features/{name}.xml` and compares it with the reference `{name}.exr`.
 fn feature_matches_mitsuba(name: &str, spp: u32, ref_spp: u32) {
-    let (scene, fs) = load(&format!("tests/data/mitsuba/features/{name}.xml"));
-    let s = settings(
-        &fs,
-        FileSettings {
-            spp: Some(spp),
-            ..Default::default()
-        },
-    );
-    let r = render_with(&scene, &s);
-    let c = BlockComparison::new(&r, &reference(&format!("{name}.exr")), 8, ref_spp);
-    eprintln!(
-        "{name}: {} blocks, max z {:.2}, aggregate z {:.2}",
-        c.mine.len(),
-        c.max_z(),
-        c.aggregate_z()
-    );
-    let out = c.outliers(Z);
-    if !out.is_empty() {
-        c.print();
-    }
-    assert!(out.is_empty(), "{name}: blocks beyond {Z} sigma: {out:?}");
-    assert!(
-        c.aggregate_z().abs() < Z,
-        "{name}: biased overall, aggregate z {:.2}",
-        c.aggregate_z()
+    file_matches_reference(
+        &format!("tests/data/mitsuba/features/{name}.xml"),
+        spp,
+        &format!("{name}.exr"),
+        ref_spp,
     );
 }
 

@@ -9,6 +9,7 @@ pub mod desc;
 pub mod error;
 pub mod obj;
 pub mod ply;
+pub mod text;
 pub mod toml;
 pub mod xml;
 

@@ -3,6 +3,7 @@
 //! statements (`vt`, `o`, `g`, `s`, `usemtl`, `mtllib`, …) are read past. Errors name the
 //! file, line and column.
 
+use super::text::Fields;
 use super::SceneError;
 use crate::geometry::mesh::TriangleMesh;
 use glam::Vec3;
@@ -142,33 +143,4 @@ pub fn parse_obj(path: &Path, text: &str) -> Result<TriangleMesh, SceneError> {
         uvs,
         indices,
     })
-}
-
-/// Whitespace-separated fields with their 1-based columns.
-struct Fields<'a> {
-    s: &'a str,
-    i: usize,
-}
-
-impl<'a> Fields<'a> {
-    fn new(s: &'a str) -> Self {
-        Fields { s, i: 0 }
-    }
-}
-
-impl<'a> Iterator for Fields<'a> {
-    type Item = (usize, &'a str);
-    fn next(&mut self) -> Option<Self::Item> {
-        let rest = &self.s[self.i..];
-        let start = rest.find(|c: char| !c.is_whitespace())?;
-        let tok_start = self.i + start;
-        let len = self.s[tok_start..]
-            .find(char::is_whitespace)
-            .unwrap_or(self.s.len() - tok_start);
-        self.i = tok_start + len;
-        Some((
-            self.s[..tok_start].chars().count() + 1,
-            &self.s[tok_start..tok_start + len],
-        ))
-    }
 }

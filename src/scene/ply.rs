@@ -12,6 +12,7 @@
 //! header are never trusted for allocation: storage grows with the data actually present, so
 //! a tiny file that declares billions of vertices fails fast without allocating.
 
+use super::text::Fields;
 use super::SceneError;
 use crate::geometry::mesh::TriangleMesh;
 use glam::{Vec2, Vec3};
@@ -744,35 +745,5 @@ impl Reader<'_, '_> {
             }
         }
         Ok(())
-    }
-}
-
-/// Whitespace-separated fields with their 1-based columns.
-#[derive(Clone)]
-struct Fields<'a> {
-    s: &'a str,
-    i: usize,
-}
-
-impl<'a> Fields<'a> {
-    fn new(s: &'a str) -> Self {
-        Fields { s, i: 0 }
-    }
-}
-
-impl<'a> Iterator for Fields<'a> {
-    type Item = (usize, &'a str);
-    fn next(&mut self) -> Option<Self::Item> {
-        let rest = &self.s[self.i..];
-        let start = rest.find(|c: char| !c.is_whitespace())?;
-        let tok_start = self.i + start;
-        let len = self.s[tok_start..]
-            .find(char::is_whitespace)
-            .unwrap_or(self.s.len() - tok_start);
-        self.i = tok_start + len;
-        Some((
-            self.s[..tok_start].chars().count() + 1,
-            &self.s[tok_start..tok_start + len],
-        ))
     }
 }

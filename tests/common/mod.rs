@@ -157,3 +157,49 @@ impl BlockComparison {
         }
     }
 }
+
+/// z-score above which a block fails: with a few hundred blocks, P(|Z| > 5) ≈ 6e-7 each.
+pub const Z: f64 = 5.0;
+
+impl BlockComparison {
+    /// Every block within `Z` standard deviations of the measured noise, and the image as a
+    /// whole unbiased (aggregate z within `Z`); prints the summary, and the blocks if any fail.
+    pub fn assert_within_noise(&self, name: &str) {
+        let out = self.outliers(Z);
+        eprintln!(
+            "{name}: {} blocks, max z {:.2}, aggregate z {:.2}, max rel err {:.2} %",
+            self.mine.len(),
+            self.max_z(),
+            self.aggregate_z(),
+            100.0
+                * (0..self.mine.len())
+                    .map(|i| self.rel_err(i))
+                    .fold(0.0, f64::max)
+        );
+        if !out.is_empty() {
+            self.print();
+        }
+        assert!(out.is_empty(), "{name}: blocks beyond {Z} sigma: {out:?}");
+        assert!(
+            self.aggregate_z().abs() < Z,
+            "{name}: the image as a whole is biased: aggregate z {:.2}",
+            self.aggregate_z()
+        );
+    }
+}
+
+/// Renders a scene file at its own resolution with `spp` and checks 8×8 blocks against the
+/// reference `tests/data/refs/{reference}` (same resolution, made with `ref_spp`).
+pub fn file_matches_reference(scene_file: &str, spp: u32, reference_file: &str, ref_spp: u32) {
+    let (scene, fs) = load(scene_file);
+    let s = settings(
+        &fs,
+        FileSettings {
+            spp: Some(spp),
+            ..Default::default()
+        },
+    );
+    let r = render_with(&scene, &s);
+    BlockComparison::new(&r, &reference(reference_file), 8, ref_spp)
+        .assert_within_noise(scene_file);
+}
