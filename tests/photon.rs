@@ -212,6 +212,16 @@ fn block_errors(r: &Rendered) -> Vec<f64> {
 /// The `photon` integrator (biased) within 3 % of the Mitsuba path-traced reference on every
 /// block mean. The final-gather noise of a block mean, measured from the per-pixel variance
 /// over 256 pixels × 16 samples × 16 gather rays, is about 0.3 %, so 3 % is the bias budget.
+/// The largest relative error of a Cornell-box block mean (64×64) rendered by `kind`.
+fn worst_cornell_block(kind: IntegratorKind, spp: u32, pp: PhotonParams) -> f64 {
+    let (scene, s) = photon_settings(kind, 64, spp, pp);
+    let worst = block_errors(&render_with(&scene, &s))
+        .into_iter()
+        .fold(0.0, f64::max);
+    eprintln!("{}: worst block {:.2} %", kind.name(), 100.0 * worst);
+    worst
+}
+
 #[test]
 fn photon_cornell_box_within_3_percent() {
     let pp = PhotonParams {
@@ -221,11 +231,7 @@ fn photon_cornell_box_within_3_percent() {
         final_gather: 8,
         ..Default::default()
     };
-    let (scene, s) = photon_settings(IntegratorKind::Photon, 64, 8, pp);
-    let r = render_with(&scene, &s);
-    let e = block_errors(&r);
-    let worst = e.iter().cloned().fold(0.0, f64::max);
-    eprintln!("photon: worst block {:.2} %", 100.0 * worst);
+    let worst = worst_cornell_block(IntegratorKind::Photon, 8, pp);
     assert!(worst < 0.03, "worst block off by {:.2} %", 100.0 * worst);
 }
 
@@ -242,11 +248,7 @@ fn sppm_cornell_box_within_2_percent() {
         initial_radius: Some(0.03),
         ..Default::default()
     };
-    let (scene, s) = photon_settings(IntegratorKind::Sppm, 64, 1, pp);
-    let r = render_with(&scene, &s);
-    let e = block_errors(&r);
-    let worst = e.iter().cloned().fold(0.0, f64::max);
-    eprintln!("sppm: worst block {:.2} %", 100.0 * worst);
+    let worst = worst_cornell_block(IntegratorKind::Sppm, 1, pp);
     assert!(worst < 0.02, "worst block off by {:.2} %", 100.0 * worst);
 }
 
