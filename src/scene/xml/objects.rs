@@ -538,9 +538,8 @@ impl<'a> Builder<'a> {
                 let (r, t) = self.color_param(&p, "specular_reflectance", 1.0)?;
                 texture = t;
                 if kind == "conductor" {
-                    if p.string_opt("material")? == Some("none")
-                        || (eta == Color::ZERO && k == Color::ONE)
-                    {
+                    // `material = "none"` is η = 0, k = 1: Fresnel reflectance 1, a mirror.
+                    if eta == Color::ZERO && k == Color::ONE {
                         Bsdf::Mirror(Mirror { reflectance: r })
                     } else {
                         Bsdf::Conductor(Conductor::new(eta, k, r))
