@@ -26,12 +26,10 @@ fn leaf_ref(first: u32, count: u32) -> ChildRef {
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(16))]
 pub struct Node4 {
-    min_x: Vec4,
-    max_x: Vec4,
-    min_y: Vec4,
-    max_y: Vec4,
-    min_z: Vec4,
-    max_z: Vec4,
+    /// The four children's min x, max x, min y, max y, min z, max z: slab `2·axis` is the
+    /// lower bound, `2·axis + 1` the upper, so a ray picks its near and far slab per axis by
+    /// index (no selects per node).
+    bounds: [Vec4; 6],
     child: [ChildRef; 4],
 }
 
@@ -93,13 +91,9 @@ impl WideBvh {
             kids.push(b.nodes[k].offset as usize);
         }
         let index = self.nodes.len();
+        let (lo, hi) = (Vec4::splat(f32::INFINITY), Vec4::splat(f32::NEG_INFINITY));
         self.nodes.push(Node4 {
-            min_x: Vec4::splat(f32::INFINITY),
-            max_x: Vec4::splat(f32::NEG_INFINITY),
-            min_y: Vec4::splat(f32::INFINITY),
-            max_y: Vec4::splat(f32::NEG_INFINITY),
-            min_z: Vec4::splat(f32::INFINITY),
-            max_z: Vec4::splat(f32::NEG_INFINITY),
+            bounds: [lo, hi, lo, hi, lo, hi],
             child: [EMPTY; 4],
         });
         for (slot, &k) in kids.iter().enumerate() {
@@ -111,12 +105,10 @@ impl WideBvh {
                 self.collapse(b, k)
             };
             let node = &mut self.nodes[index];
-            node.min_x[slot] = kb.min.x;
-            node.max_x[slot] = kb.max.x;
-            node.min_y[slot] = kb.min.y;
-            node.max_y[slot] = kb.max.y;
-            node.min_z[slot] = kb.min.z;
-            node.max_z[slot] = kb.max.z;
+            for axis in 0..3 {
+                node.bounds[2 * axis][slot] = kb.min[axis];
+                node.bounds[2 * axis + 1][slot] = kb.max[axis];
+            }
             node.child[slot] = r;
         }
         index as ChildRef
@@ -192,7 +184,8 @@ impl WideBvh {
         }
     }
 
-    /// Any hit before `t_max`.
+    /// Any hit before `t_max`. Order does not matter here: the first hit child is visited
+    /// next and the others are pushed as they come.
     #[inline]
     pub fn occluded<F: FnMut(usize, f32) -> bool>(
         &self,
@@ -200,12 +193,16 @@ impl WideBvh {
         t_max: f32,
         mut hit: F,
     ) -> bool {
+        if self.root == EMPTY {
+            return false;
+        }
         let r = RayBoxes::new(ray);
         let mut stack = Stack::new();
         let mut cur = self.root;
         loop {
-            if cur == EMPTY {
-            } else if cur & LEAF != 0 {
+            // Empty child slots have empty boxes and are never entered, so only the root can
+            // be EMPTY, and it was checked above.
+            if cur & LEAF != 0 {
                 let first = ((cur & !LEAF) >> 4) as usize;
                 for p in first..first + (cur & 15) as usize {
                     if hit(p, t_max) {
@@ -215,10 +212,14 @@ impl WideBvh {
             } else {
                 let node = &self.nodes[cur as usize];
                 let (mut mask, _) = r.test(node, t_max);
-                while mask != 0 {
-                    let s = mask.trailing_zeros() as usize;
+                if mask != 0 {
+                    cur = node.child[mask.trailing_zeros() as usize];
                     mask &= mask - 1;
-                    stack.push(node.child[s]);
+                    while mask != 0 {
+                        stack.push(node.child[mask.trailing_zeros() as usize]);
+                        mask &= mask - 1;
+                    }
+                    continue;
                 }
             }
             match stack.pop() {
@@ -230,17 +231,24 @@ impl WideBvh {
 }
 
 /// A ray prepared for 4-wide slab tests: the origin and inverse direction splatted, and per
-/// axis which bound is near (so no per-box min/max of the two slab distances is needed).
+/// axis the index of the near slab in `Node4::bounds` (so no per-box min/max of the two slab
+/// distances is needed).
 struct RayBoxes {
     o: [Vec4; 3],
     inv: [Vec4; 3],
-    neg: [bool; 3],
+    /// `2·axis`, plus one where the ray runs towards −axis (the upper bound is then near);
+    /// and the far slab of each axis.
+    near: [usize; 3],
+    far: [usize; 3],
 }
 
 impl RayBoxes {
-    #[inline]
+    #[inline(always)]
     fn new(ray: &Ray) -> Self {
         let inv = ray.d.recip();
+        // The sign of the reciprocal, not of the direction: −0.0 < 0.0 is false, yet its
+        // reciprocal is −∞, so the far bound is the minimum.
+        let neg = |v: f32| (v < 0.0) as usize;
         RayBoxes {
             o: [
                 Vec4::splat(ray.o.x),
@@ -248,9 +256,8 @@ impl RayBoxes {
                 Vec4::splat(ray.o.z),
             ],
             inv: [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)],
-            // The sign of the reciprocal, not of the direction: −0.0 < 0.0 is false, yet its
-            // reciprocal is −∞, so the far bound is the minimum.
-            neg: [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0],
+            near: [neg(inv.x), 2 + neg(inv.y), 4 + neg(inv.z)],
+            far: [1 - neg(inv.x), 3 - neg(inv.y), 5 - neg(inv.z)],
         }
     }
 
@@ -259,16 +266,17 @@ impl RayBoxes {
     /// (Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013).
     #[inline(always)]
     fn test(&self, n: &Node4, t_max: f32) -> (u32, Vec4) {
-        let pick = |neg: bool, lo: Vec4, hi: Vec4| if neg { (hi, lo) } else { (lo, hi) };
-        let (nx, fx) = pick(self.neg[0], n.min_x, n.max_x);
-        let (ny, fy) = pick(self.neg[1], n.min_y, n.max_y);
-        let (nz, fz) = pick(self.neg[2], n.min_z, n.max_z);
-        let tn_x = (nx - self.o[0]) * self.inv[0];
-        let tn_y = (ny - self.o[1]) * self.inv[1];
-        let tn_z = (nz - self.o[2]) * self.inv[2];
-        let tf_x = (fx - self.o[0]) * self.inv[0];
-        let tf_y = (fy - self.o[1]) * self.inv[1];
-        let tf_z = (fz - self.o[2]) * self.inv[2];
+        let slab = |i: usize| {
+            debug_assert!(i < 6);
+            // SAFETY: `near` and `far` hold indices below 6, set in `new`.
+            unsafe { *n.bounds.get_unchecked(i) }
+        };
+        let tn_x = (slab(self.near[0]) - self.o[0]) * self.inv[0];
+        let tn_y = (slab(self.near[1]) - self.o[1]) * self.inv[1];
+        let tn_z = (slab(self.near[2]) - self.o[2]) * self.inv[2];
+        let tf_x = (slab(self.far[0]) - self.o[0]) * self.inv[0];
+        let tf_y = (slab(self.far[1]) - self.o[1]) * self.inv[1];
+        let tf_z = (slab(self.far[2]) - self.o[2]) * self.inv[2];
         let tnear = tn_x.max(tn_y).max(tn_z).max(Vec4::ZERO);
         let tfar = tf_x.min(tf_y).min(tf_z).min(Vec4::splat(t_max)) * (1.0 + 2.0 * gamma(3));
         (tnear.cmple(tfar).bitmask(), tnear)

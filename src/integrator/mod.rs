@@ -181,7 +181,8 @@ pub(crate) fn sample_lights(
             continue;
         };
         let wi = frame.to_local(ls.wi);
-        let f = material.eval(wo, wi) * wi.z.abs();
+        let (f, bsdf_pdf) = material.eval_pdf(wo, wi);
+        let f = f * wi.z.abs();
         if f == Color::ZERO {
             continue;
         }
@@ -197,7 +198,7 @@ pub(crate) fn sample_lights(
         let w = if ls.delta {
             1.0
         } else {
-            power_heuristic(n as f32 * ls.pdf, material.pdf(wo, wi))
+            power_heuristic(n as f32 * ls.pdf, bsdf_pdf)
         };
         sum += f * ls.le * (w / ls.pdf);
     }

@@ -15,6 +15,10 @@ use glam::{Vec2, Vec3A};
 #[derive(Clone, Copy, Debug)]
 pub enum LightShape {
     Triangle(Triangle),
+    /// Two triangles of one mesh that together form a parallelogram `p0 + u·e1 + v·e2`
+    /// (a quad light, as most scenes have): sampled as one light, uniformly in (u, v),
+    /// without the square root of triangle sampling and with no choice between the halves.
+    Parallelogram { p0: Vec3A, e1: Vec3A, e2: Vec3A },
     Sphere(Sphere),
 }
 
@@ -23,19 +27,77 @@ pub struct AreaLight {
     pub shape: LightShape,
     pub radiance: Color,
     pub area: f32,
+    /// Planar shapes: the unit normal of the emitting side, and a bound on the floating-point
+    /// error of any sampled point, both computed once here rather than per shadow ray.
+    normal: Vec3A,
+    err: Vec3A,
 }
 
 impl AreaLight {
     pub fn new(shape: LightShape, radiance: Color) -> Self {
-        let area = match &shape {
-            LightShape::Triangle(t) => t.area(),
-            LightShape::Sphere(s) => s.area(),
+        let (area, normal, err) = match &shape {
+            // p = p0·w + p1·u + p2·v with w + u + v = 1: pbrt-v4's γ(7) bound (§6.8.4) taken
+            // at its largest, weights of one.
+            LightShape::Triangle(t) => (
+                t.area(),
+                t.normal_unnormalized().normalize(),
+                (t.p0.abs() + t.p1.abs() + t.p2.abs()) * gamma(7),
+            ),
+            // p = p0 + u·e1 + v·e2, the edges themselves rounded differences of vertices.
+            LightShape::Parallelogram { p0, e1, e2 } => {
+                let n = e1.cross(*e2);
+                (
+                    n.length(),
+                    n.normalize(),
+                    (p0.abs() * 3.0 + e1.abs() * 2.0 + e2.abs() * 2.0) * gamma(7),
+                )
+            }
+            LightShape::Sphere(s) => (s.area(), Vec3A::Z, Vec3A::ZERO),
         };
         AreaLight {
             shape,
             radiance,
             area,
+            normal,
+            err,
         }
+    }
+
+    /// The parallelogram light made of triangles `a` and `b` (one mesh, same emission), if
+    /// they share an edge as the diagonal of a parallelogram and face the same way; within
+    /// a relative 1e-6, far below what the image can show.
+    pub fn parallelogram(a: &Triangle, b: &Triangle, radiance: Color) -> Option<AreaLight> {
+        let (va, vb) = (a.vertices(), b.vertices());
+        // The vertex of `a` not in `b`, and of `b` not in `a`; exactly one each.
+        let only = |v: &[Vec3A; 3], w: &[Vec3A; 3]| {
+            let mut it = v.iter().filter(|p| !w.contains(p));
+            match (it.next(), it.next()) {
+                (Some(p), None) => Some(*p),
+                _ => None,
+            }
+        };
+        let (x, y) = (only(&va, &vb)?, only(&vb, &va)?);
+        let mut shared = va.iter().filter(|p| vb.contains(p));
+        let (s0, s1) = (*shared.next()?, *shared.next()?);
+        // The diagonals of a parallelogram bisect each other: x + y = s0 + s1.
+        let scale = (x.abs() + y.abs() + s0.abs() + s1.abs()).max_element();
+        if ((x + y) - (s0 + s1)).abs().max_element() > 1e-6 * scale {
+            return None;
+        }
+        let (na, nb) = (a.normal_unnormalized(), b.normal_unnormalized());
+        if na.dot(nb) <= 0.0 {
+            return None;
+        }
+        // Orient the edges so that e1 × e2 is the triangles' (emitting) normal.
+        let (e1, e2) = if (s0 - x).cross(s1 - x).dot(na) > 0.0 {
+            (s0 - x, s1 - x)
+        } else {
+            (s1 - x, s0 - x)
+        };
+        Some(AreaLight::new(
+            LightShape::Parallelogram { p0: x, e1, e2 },
+            radiance,
+        ))
     }
 
     /// Emitted power of a one-sided Lambertian emitter, Φ = π·A·L, averaged over RGB.
@@ -50,8 +112,11 @@ impl AreaLight {
         match &self.shape {
             LightShape::Triangle(t) => {
                 let (bu, bv) = Triangle::sample_uniform(u);
-                let (p, err) = t.point(bu, bv);
-                (p, t.normal_unnormalized().normalize(), err)
+                let p = t.p0 * (1.0 - bu - bv) + t.p1 * bu + t.p2 * bv;
+                (p, self.normal, self.err)
+            }
+            LightShape::Parallelogram { p0, e1, e2 } => {
+                (*p0 + *e1 * u.x + *e2 * u.y, self.normal, self.err)
             }
             LightShape::Sphere(s) => {
                 let n = crate::material::sampling::square_to_uniform_sphere(u);

@@ -192,6 +192,28 @@ impl Material {
         }
     }
 
+    /// f(wo, wi) for radiance transport and the pdf of sampling `wi`, with one orientation
+    /// test and one match: what next-event estimation needs for each shadow ray.
+    #[inline]
+    pub fn eval_pdf(&self, wo: Vec3A, wi: Vec3A) -> (Color, f32) {
+        if let Bsdf::RoughDielectric(b) = &self.bsdf {
+            return (b.eval(wo, wi, TransportMode::Radiance), b.pdf(wo, wi));
+        }
+        let Some(s) = self.orient(wo) else {
+            return (Color::ZERO, 0.0);
+        };
+        let flip = Vec3A::new(1.0, 1.0, s);
+        let (wo, wi) = (wo * flip, wi * flip);
+        match &self.bsdf {
+            Bsdf::Lambert(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
+            Bsdf::OrenNayar(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
+            Bsdf::RoughConductor(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
+            Bsdf::Plastic(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
+            Bsdf::RoughPlastic(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
+            _ => (Color::ZERO, 0.0),
+        }
+    }
+
     /// Solid-angle pdf of sampling `wi` given `wo`. Zero for delta BSDFs.
     #[inline]
     pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {

@@ -20,7 +20,11 @@ impl Scene {
             let emission = shape.emission.filter(|e| e.max_element() > 0.0);
             match &shape.geometry {
                 GeometryDesc::Mesh(mesh) => {
-                    for idx in &mesh.indices {
+                    let mesh_lights = match emission {
+                        Some(e) => mesh_lights(mesh, e, &mut lights),
+                        None => Vec::new(),
+                    };
+                    for (k, idx) in mesh.indices.iter().enumerate() {
                         let [a, b, c] = idx.map(|i| Vec3A::from(mesh.positions[i as usize]));
                         let tri = Triangle::new(a, b, c);
                         let area = tri.area();
@@ -42,13 +46,7 @@ impl Scene {
                         } else {
                             NO_NORMALS
                         };
-                        let light = match emission {
-                            Some(e) => {
-                                lights.push(AreaLight::new(LightShape::Triangle(tri), e));
-                                (lights.len() - 1) as u32
-                            }
-                            None => NO_LIGHT,
-                        };
+                        let light = mesh_lights.get(k).copied().unwrap_or(NO_LIGHT);
                         bounds.push(Aabb::from_points(&[a, b, c]));
                         prims.push(Primitive {
                             shape: Shape::Triangle(tri, nidx),
@@ -126,4 +124,42 @@ impl Scene {
             desc_settings: desc.settings,
         }
     }
+}
+
+/// The area lights of an emissive mesh, and the light of each of its triangles (NO_LIGHT for
+/// degenerate ones). Consecutive triangles that form a parallelogram (a quad split along a
+/// diagonal, as OBJ, PLY and Mitsuba's rectangles give them) share one parallelogram light.
+fn mesh_lights(
+    mesh: &crate::geometry::mesh::TriangleMesh,
+    e: crate::Color,
+    lights: &mut Vec<AreaLight>,
+) -> Vec<u32> {
+    let tri = |k: usize| {
+        let [a, b, c] = mesh.indices[k].map(|i| Vec3A::from(mesh.positions[i as usize]));
+        Triangle::new(a, b, c)
+    };
+    let n = mesh.indices.len();
+    let mut ids = vec![NO_LIGHT; n];
+    let mut k = 0;
+    while k < n {
+        let t = tri(k);
+        if !(t.area() > 0.0) {
+            k += 1;
+            continue;
+        }
+        if k + 1 < n {
+            let t2 = tri(k + 1);
+            if let Some(l) = AreaLight::parallelogram(&t, &t2, e).filter(|_| t2.area() > 0.0) {
+                lights.push(l);
+                ids[k] = (lights.len() - 1) as u32;
+                ids[k + 1] = ids[k];
+                k += 2;
+                continue;
+            }
+        }
+        lights.push(AreaLight::new(LightShape::Triangle(t), e));
+        ids[k] = (lights.len() - 1) as u32;
+        k += 1;
+    }
+    ids
 }
