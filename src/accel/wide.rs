@@ -35,7 +35,7 @@ pub struct Node4 {
 
 #[derive(Clone, Debug, Default)]
 pub struct WideBvh {
-    pub nodes: Vec<Node4>,
+    nodes: Vec<Node4>,
     /// The root: an inner node, a single leaf, or EMPTY.
     root: ChildRef,
     bounds: Option<Aabb>,
@@ -114,6 +114,20 @@ impl WideBvh {
         index as ChildRef
     }
 
+    /// Inner node `i`, without a bounds check: child references are made by `collapse` and
+    /// always name a node it pushed.
+    #[inline(always)]
+    fn node(&self, i: ChildRef) -> &Node4 {
+        debug_assert!((i as usize) < self.nodes.len());
+        // SAFETY: see above; `nodes` is never shrunk after the build.
+        unsafe { self.nodes.get_unchecked(i as usize) }
+    }
+
+    /// Bytes of the nodes.
+    pub fn memory_bytes(&self) -> usize {
+        self.nodes.len() * std::mem::size_of::<Node4>()
+    }
+
     pub fn bounds(&self) -> Option<Aabb> {
         self.bounds
     }
@@ -144,7 +158,7 @@ impl WideBvh {
                     }
                 }
             } else {
-                let node = &self.nodes[cur as usize];
+                let node = self.node(cur);
                 let (mask, tnear) = r.test(node, t_max);
                 if mask != 0 {
                     // Push the hit children farthest first, so the nearest is visited next.
@@ -210,7 +224,7 @@ impl WideBvh {
                     }
                 }
             } else {
-                let node = &self.nodes[cur as usize];
+                let node = self.node(cur);
                 let (mut mask, _) = r.test(node, t_max);
                 if mask != 0 {
                     cur = node.child[mask.trailing_zeros() as usize];
@@ -301,7 +315,9 @@ impl Stack {
     }
     #[inline(always)]
     fn push(&mut self, v: u32) {
-        self.items[self.len] = std::mem::MaybeUninit::new(v);
+        debug_assert!(self.len < self.items.len());
+        // SAFETY: the depth bound above keeps `len` below the capacity.
+        unsafe { *self.items.get_unchecked_mut(self.len) = std::mem::MaybeUninit::new(v) };
         self.len += 1;
     }
     #[inline(always)]
@@ -311,6 +327,6 @@ impl Stack {
         }
         self.len -= 1;
         // SAFETY: every slot below `len` was written by `push`.
-        Some(unsafe { self.items[self.len].assume_init() })
+        Some(unsafe { self.items.get_unchecked(self.len).assume_init() })
     }
 }

@@ -236,7 +236,7 @@ impl Lights {
     }
 
     /// Samples a light and a point on it as seen from `p`.
-    #[inline]
+    #[inline(always)]
     pub fn sample(&self, p: Vec3A, u_select: f32, u: Vec2) -> Option<LightSample> {
         let (id, pmf) = self.distribution.sample_discrete(u_select)?;
         let Some(light) = self.lights.get(id) else {

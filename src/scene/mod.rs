@@ -197,7 +197,7 @@ impl Scene {
     pub fn memory_bytes(&self) -> usize {
         use std::mem::size_of;
         self.prims.len() * size_of::<Primitive>()
-            + self.bvh.nodes.len() * size_of::<crate::accel::wide::Node4>()
+            + self.bvh.memory_bytes()
             + self.normals.len() * size_of::<[Vec3A; 3]>()
             + self.uvs.len() * size_of::<[Vec2; 3]>()
     }
