@@ -301,23 +301,27 @@ impl RayBoxes {
 /// path is too, and each level leaves at most three siblings behind: 3 × MAX_DEPTH entries
 /// suffice. Left uninitialised: zeroing it cost 4 % of all instructions per ray.
 struct Stack {
-    items: [std::mem::MaybeUninit<u32>; 3 * super::bvh::MAX_DEPTH],
+    items: [std::mem::MaybeUninit<u32>; STACK],
     len: usize,
 }
+
+const STACK: usize = 3 * super::bvh::MAX_DEPTH;
 
 impl Stack {
     #[inline(always)]
     fn new() -> Self {
-        Stack {
-            items: [std::mem::MaybeUninit::uninit(); 3 * super::bvh::MAX_DEPTH],
-            len: 0,
+        // Built in place from an uninitialised whole: initialising `len` as a field next to
+        // the uninitialised items let LLVM merge both into one memset of the whole stack.
+        let mut s = std::mem::MaybeUninit::<Stack>::uninit();
+        // SAFETY: `len` is written before use; the items are MaybeUninit and need nothing.
+        unsafe {
+            std::ptr::addr_of_mut!((*s.as_mut_ptr()).len).write(0);
+            s.assume_init()
         }
     }
     #[inline(always)]
     fn push(&mut self, v: u32) {
-        debug_assert!(self.len < self.items.len());
-        // SAFETY: the depth bound above keeps `len` below the capacity.
-        unsafe { *self.items.get_unchecked_mut(self.len) = std::mem::MaybeUninit::new(v) };
+        self.items[self.len] = std::mem::MaybeUninit::new(v);
         self.len += 1;
     }
     #[inline(always)]
