@@ -49,6 +49,60 @@ pub fn sq_to_f64(s: i128) -> f64 {
     s as f64 * (1.0 / SQ_SCALE)
 }
 
+/// The f32 `v` times 2^`frac`, rounded half away from zero, as `fixed_sum` would give it for
+/// `v as f64` (saturating like `as i128`), computed from the bits of `v` with integer
+/// operations only: an f32 is m·2^e with a 24-bit m, so the product is a shift of m. The f64
+/// path calls a software f64 → i128 conversion for every channel of every sample.
+#[inline]
+fn fixed_from_f32(v: f32, frac: i32) -> i128 {
+    let bits = v.to_bits();
+    let exp = ((bits >> 23) & 0xff) as i32;
+    let (m, e) = if exp == 0 {
+        (bits & 0x7f_ffff, -149) // subnormal
+    } else {
+        ((bits & 0x7f_ffff) | 0x80_0000, exp - 150)
+    };
+    let mag = shift_round(m as u128, e + frac, 24);
+    match (bits >> 31 != 0, mag) {
+        (true, i128::MAX) => i128::MIN, // saturated, as `as i128` saturates
+        (true, _) => -mag,
+        (false, _) => mag,
+    }
+}
+
+/// v² times 2^`frac`, rounded, for an f32 `v` (the square is exact: a 48-bit m²).
+#[inline]
+fn fixed_sq_from_f32(v: f32, frac: i32) -> i128 {
+    let bits = v.to_bits() & 0x7fff_ffff;
+    let exp = (bits >> 23) as i32;
+    let (m, e) = if exp == 0 {
+        (bits & 0x7f_ffff, -149)
+    } else {
+        ((bits & 0x7f_ffff) | 0x80_0000, exp - 150)
+    };
+    shift_round(m as u128 * m as u128, 2 * e + frac, 48)
+}
+
+/// m·2^s rounded half up, for m < 2^`width`; saturates at i128::MAX as `as i128` does.
+#[inline]
+fn shift_round(m: u128, s: i32, width: i32) -> i128 {
+    if m == 0 {
+        0
+    } else if s >= 0 {
+        // m·2^s needs 128 − lz + s bits; 127 fit in an i128.
+        if s >= m.leading_zeros() as i32 {
+            i128::MAX
+        } else {
+            (m << s) as i128
+        }
+    } else if -s > width {
+        0 // below half a unit
+    } else {
+        let r = -s as u32;
+        ((m + (1u128 << (r - 1))) >> r) as i128
+    }
+}
+
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Film {
     pub width: u32,
@@ -74,10 +128,9 @@ impl PixelSums {
     #[inline]
     pub fn add(&mut self, l: Color) {
         for c in 0..3 {
-            let v = l[c] as f64;
-            self.sum[c] = self.sum[c].wrapping_add(fixed_sum(v));
-            // The square of an f32 is exact in f64.
-            self.sum_sq[c] = self.sum_sq[c].wrapping_add(fixed_sq(v * v));
+            // Equal to fixed_sum(l[c] as f64) and fixed_sq((l[c] as f64)²), without floats.
+            self.sum[c] = self.sum[c].wrapping_add(fixed_from_f32(l[c], SUM_FRAC_BITS));
+            self.sum_sq[c] = self.sum_sq[c].wrapping_add(fixed_sq_from_f32(l[c], SQ_FRAC_BITS));
         }
         self.count += 1;
     }
@@ -203,6 +256,29 @@ impl Film {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The integer conversions give exactly what the f64 ones give, for every kind of f32:
+    /// zero, subnormals, values that round at half a unit, ordinary and huge ones.
+    #[test]
+    fn integer_conversion_matches_f64() {
+        let mut vals = vec![0.0f32, -0.0, 1.0, -1.0, 0.5, f32::MIN_POSITIVE, 1e-45, -1e-45];
+        vals.extend([f32::MAX, f32::MIN, 2.0f32.powi(-64), 2.0f32.powi(-65), 3.0 * 2.0f32.powi(-66)]);
+        vals.extend([2.0f32.powi(-24), 2.0f32.powi(-25), 1.5 * 2.0f32.powi(-25), 9.2e18, 3e38]);
+        // And a million pseudo-random finite bit patterns over the whole range.
+        let mut x = 0x1234_5678_9abc_def0u64;
+        while vals.len() < 1_000_000 {
+            x = crate::sampler::mix64(x);
+            let v = f32::from_bits(x as u32);
+            if v.is_finite() {
+                vals.push(v);
+            }
+        }
+        for v in vals {
+            assert_eq!(fixed_from_f32(v, SUM_FRAC_BITS), fixed_sum(v as f64), "Σ of {v:e}");
+            let v2 = v as f64 * v as f64;
+            assert_eq!(fixed_sq_from_f32(v, SQ_FRAC_BITS), fixed_sq(v2), "Σ² of {v:e}");
+        }
+    }
 
     /// Samples whose f64 running sums depend on the grouping give the same fixed-point sums
     /// in any grouping and order.
