@@ -261,9 +261,30 @@ mod tests {
     /// zero, subnormals, values that round at half a unit, ordinary and huge ones.
     #[test]
     fn integer_conversion_matches_f64() {
-        let mut vals = vec![0.0f32, -0.0, 1.0, -1.0, 0.5, f32::MIN_POSITIVE, 1e-45, -1e-45];
-        vals.extend([f32::MAX, f32::MIN, 2.0f32.powi(-64), 2.0f32.powi(-65), 3.0 * 2.0f32.powi(-66)]);
-        vals.extend([2.0f32.powi(-24), 2.0f32.powi(-25), 1.5 * 2.0f32.powi(-25), 9.2e18, 3e38]);
+        let mut vals = vec![
+            0.0f32,
+            -0.0,
+            1.0,
+            -1.0,
+            0.5,
+            f32::MIN_POSITIVE,
+            1e-45,
+            -1e-45,
+        ];
+        vals.extend([
+            f32::MAX,
+            f32::MIN,
+            2.0f32.powi(-64),
+            2.0f32.powi(-65),
+            3.0 * 2.0f32.powi(-66),
+        ]);
+        vals.extend([
+            2.0f32.powi(-24),
+            2.0f32.powi(-25),
+            1.5 * 2.0f32.powi(-25),
+            9.2e18,
+            3e38,
+        ]);
         // And a million pseudo-random finite bit patterns over the whole range.
         let mut x = 0x1234_5678_9abc_def0u64;
         while vals.len() < 1_000_000 {
@@ -274,9 +295,17 @@ mod tests {
             }
         }
         for v in vals {
-            assert_eq!(fixed_from_f32(v, SUM_FRAC_BITS), fixed_sum(v as f64), "Σ of {v:e}");
+            assert_eq!(
+                fixed_from_f32(v, SUM_FRAC_BITS),
+                fixed_sum(v as f64),
+                "Σ of {v:e}"
+            );
             let v2 = v as f64 * v as f64;
-            assert_eq!(fixed_sq_from_f32(v, SQ_FRAC_BITS), fixed_sq(v2), "Σ² of {v:e}");
+            assert_eq!(
+                fixed_sq_from_f32(v, SQ_FRAC_BITS),
+                fixed_sq(v2),
+                "Σ² of {v:e}"
+            );
         }
     }
 

@@ -120,24 +120,15 @@ impl Sampler {
     #[inline(never)]
     fn sobol_1d(&mut self) -> f32 {
         let (idx, seed) = self.shuffled_index();
-        let x = owen_scramble_rev(
-            sobol_burley::parts::sobol_rev(idx, 0),
-            hash(seed ^ 0x912f_69ba),
-        );
+        let x = owen_scramble_rev(sobol_rev_fast(idx, 0), hash(seed ^ 0x912f_69ba));
         sobol_burley::parts::u32_to_f32_norm(x.reverse_bits())
     }
 
     #[inline(never)]
     fn sobol_2d(&mut self) -> Vec2 {
         let (idx, seed) = self.shuffled_index();
-        let x = owen_scramble_rev(
-            sobol_burley::parts::sobol_rev(idx, 0),
-            hash(seed ^ 0x912f_69ba),
-        );
-        let y = owen_scramble_rev(
-            sobol_burley::parts::sobol_rev(idx, 1),
-            hash(seed ^ 0x174f_18ab),
-        );
+        let x = owen_scramble_rev(sobol_rev_fast(idx, 0), hash(seed ^ 0x912f_69ba));
+        let y = owen_scramble_rev(sobol_rev_fast(idx, 1), hash(seed ^ 0x174f_18ab));
         Vec2::new(
             sobol_burley::parts::u32_to_f32_norm(x.reverse_bits()),
             sobol_burley::parts::u32_to_f32_norm(y.reverse_bits()),
@@ -149,7 +140,7 @@ impl Sampler {
     /// the seed.
     #[inline]
     fn shuffled_index(&mut self) -> (u32, u32) {
-        let seed = hash(self.seed ^ hash(self.dim.wrapping_add(0x9e37_79b9)));
+        let seed = hash(self.seed ^ DIM_HASH[self.dim as usize]);
         self.dim += 1;
         // Only the top 16 reversed bits are used by Sobol (2^16 samples at most).
         (
@@ -157,6 +148,51 @@ impl Sampler {
             seed,
         )
     }
+}
+
+/// hash(d + 0x9e3779b9) for every Sobol request d: the per-request seed mixes it in.
+const DIM_HASH: [u32; SOBOL_DIMS as usize] = {
+    let mut t = [0; SOBOL_DIMS as usize];
+    let mut d = 0;
+    while d < SOBOL_DIMS as usize {
+        t[d] = hash_const((d as u32).wrapping_add(0x9e37_79b9));
+        d += 1;
+    }
+    t
+};
+
+/// `sobol_burley::parts::hash`, as a const fn for the table above.
+const fn hash_const(mut n: u32) -> u32 {
+    n ^= 0xe6fe_3beb;
+    n ^= n >> 16;
+    n = n.wrapping_mul(0x7feb_352d);
+    n ^= n >> 15;
+    n = n.wrapping_mul(0x846c_a68b);
+    n ^= n >> 16;
+    n
+}
+
+/// `sobol_rev(i, d)` for d = 0, 1 by two table lookups: Sobol points are linear over GF(2) in
+/// the index bits, so the top two bytes of the index (all that 2^16 samples use) contribute
+/// independently. The crate walks the set bits one by one, the dearest part of a sample.
+#[inline(always)]
+fn sobol_rev_fast(i: u32, d: usize) -> u32 {
+    let t = &sobol_tables()[d];
+    t[0][(i >> 24) as usize] ^ t[1][((i >> 16) & 0xff) as usize]
+}
+
+fn sobol_tables() -> &'static [[[u32; 256]; 2]; 2] {
+    static TABLES: std::sync::OnceLock<[[[u32; 256]; 2]; 2]> = std::sync::OnceLock::new();
+    TABLES.get_or_init(|| {
+        let mut t = [[[0; 256]; 2]; 2];
+        for (d, td) in t.iter_mut().enumerate() {
+            for b in 0..256u32 {
+                td[0][b as usize] = sobol_burley::parts::sobol_rev(b << 24, d as u32);
+                td[1][b as usize] = sobol_burley::parts::sobol_rev(b << 16, d as u32);
+            }
+        }
+        t
+    })
 }
 
 /// PCG32 (O'Neill, "PCG: A Family of Simple Fast Space-Efficient Statistically Good
@@ -195,5 +231,26 @@ impl Pcg32 {
     #[inline]
     pub fn next_1d(&mut self) -> f32 {
         (self.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The table-driven Sobol dimensions and the precomputed hashes are the crate's own
+    /// functions, for every sample index the sampler uses.
+    #[test]
+    fn fast_sobol_matches_the_crate() {
+        for i in 0..(1u32 << 16) {
+            let rev = i.reverse_bits();
+            for d in 0..2 {
+                let want = sobol_burley::parts::sobol_rev(rev, d as u32);
+                assert_eq!(sobol_rev_fast(rev, d), want, "index {i}, dimension {d}");
+            }
+        }
+        for d in 0..SOBOL_DIMS {
+            assert_eq!(DIM_HASH[d as usize], hash(d.wrapping_add(0x9e37_79b9)));
+        }
     }
 }

@@ -18,7 +18,11 @@ pub enum LightShape {
     /// Two triangles of one mesh that together form a parallelogram `p0 + u·e1 + v·e2`
     /// (a quad light, as most scenes have): sampled as one light, uniformly in (u, v),
     /// without the square root of triangle sampling and with no choice between the halves.
-    Parallelogram { p0: Vec3A, e1: Vec3A, e2: Vec3A },
+    Parallelogram {
+        p0: Vec3A,
+        e1: Vec3A,
+        e2: Vec3A,
+    },
     Sphere(Sphere),
 }
 
