@@ -115,6 +115,21 @@ impl Sampler {
         }
     }
 
+    /// Four uniform numbers of one request: with Sobol, one 4D point of the request's own
+    /// scrambled sequence (dimensions 0–3, computed four lanes at once), so that a BSDF
+    /// sample and its roulette, or a light choice and the point on it, cost one request.
+    #[inline(always)]
+    pub fn next_4d(&mut self) -> [f32; 4] {
+        if self.sobol && self.dim < SOBOL_DIMS {
+            self.sobol_4d()
+        } else {
+            let a = self.rng.next_1d();
+            let b = self.rng.next_1d();
+            let c = self.rng.next_1d();
+            [a, b, c, self.rng.next_1d()]
+        }
+    }
+
     // The Sobol paths stay out of line, so that the independent path inlines into the
     // integrators' loops (a call per random number cost 10 % of all instructions).
     #[inline(never)]
@@ -133,6 +148,20 @@ impl Sampler {
             sobol_burley::parts::u32_to_f32_norm(x.reverse_bits()),
             sobol_burley::parts::u32_to_f32_norm(y.reverse_bits()),
         )
+    }
+
+    #[inline(never)]
+    fn sobol_4d(&mut self) -> [f32; 4] {
+        use sobol_burley::parts::{hash_int4, owen_scramble_int4_rev, Int4};
+        let (idx, seed) = self.shuffled_index();
+        let t = sobol4_tables();
+        let sobol = Int4::from(t[0][(idx >> 24) as usize])
+            ^ Int4::from(t[1][((idx >> 16) & 0xff) as usize]);
+        let scramble = Int4::from([seed; 4])
+            ^ Int4::from([0x912f_69ba, 0x174f_18ab, 0x691e_72ca, 0xb40c_c1b8]);
+        owen_scramble_int4_rev(sobol, hash_int4(scramble))
+            .reverse_bits()
+            .to_f32_norm()
     }
 
     /// The bit-reversed sample index, Owen-scrambled with this request's seed (a random
@@ -195,6 +224,21 @@ fn sobol_tables() -> &'static [[[u32; 256]; 2]; 2] {
     })
 }
 
+/// Dimensions 0–3 of `sobol_int4_rev` by byte, as `sobol_tables` has them for 0 and 1.
+fn sobol4_tables() -> &'static [[[u32; 4]; 256]; 2] {
+    static TABLES: std::sync::OnceLock<[[[u32; 4]; 256]; 2]> = std::sync::OnceLock::new();
+    TABLES.get_or_init(|| {
+        let mut t = [[[0; 4]; 256]; 2];
+        for b in 0..256u32 {
+            for d in 0..4 {
+                t[0][b as usize][d] = sobol_burley::parts::sobol_rev(b << 24, d as u32);
+                t[1][b as usize][d] = sobol_burley::parts::sobol_rev(b << 16, d as u32);
+            }
+        }
+        t
+    })
+}
+
 /// PCG32 (O'Neill, "PCG: A Family of Simple Fast Space-Efficient Statistically Good
 /// Algorithms for Random Number Generation", 2014): 64-bit state, 32-bit output.
 #[derive(Clone, Debug)]
@@ -251,6 +295,15 @@ mod tests {
         }
         for d in 0..SOBOL_DIMS {
             assert_eq!(DIM_HASH[d as usize], hash(d.wrapping_add(0x9e37_79b9)));
+        }
+        let t = sobol4_tables();
+        for i in (0..(1u32 << 16)).step_by(7) {
+            let rev = i.reverse_bits();
+            let want: [u32; 4] = sobol_burley::parts::sobol_int4_rev(rev, 0).into();
+            let got: [u32; 4] = std::array::from_fn(|d| {
+                t[0][(rev >> 24) as usize][d] ^ t[1][((rev >> 16) & 0xff) as usize][d]
+            });
+            assert_eq!(got, want, "index {i}");
         }
     }
 }

@@ -61,8 +61,10 @@ pub fn li(
                     stats,
                 );
         }
-        let u1 = sampler.next_1d();
-        let u2 = sampler.next_2d();
+        // One request for the direction (the best-stratified pair of a Sobol point), the
+        // lobe choice and the roulette.
+        let [ux, uy, u1, u_rr] = sampler.next_4d();
+        let u2 = glam::Vec2::new(ux, uy);
         let Some(bs) = material.sample(wo, u1, u2, TransportMode::Radiance) else {
             break;
         };
@@ -78,7 +80,7 @@ pub fn li(
         depth += 1;
         match p.rr {
             RussianRoulette::Fixed(q) => {
-                if sampler.next_1d() >= q {
+                if u_rr >= q {
                     break;
                 }
                 beta /= q;
@@ -86,7 +88,7 @@ pub fn li(
             RussianRoulette::Throughput { start } => {
                 if depth >= start {
                     let q = (beta.max_element() * eta2).min(0.95);
-                    if sampler.next_1d() >= q {
+                    if u_rr >= q {
                         break;
                     }
                     beta /= q;
