@@ -130,6 +130,20 @@ impl Sampler {
         }
     }
 
+    /// Three uniform numbers of one request: `next_4d` without its last (with independent
+    /// numbers, one fewer is drawn).
+    #[inline(always)]
+    pub fn next_3d(&mut self) -> [f32; 3] {
+        if self.sobol && self.dim < SOBOL_DIMS {
+            let [a, b, c, _] = self.sobol_4d();
+            [a, b, c]
+        } else {
+            let a = self.rng.next_1d();
+            let b = self.rng.next_1d();
+            [a, b, self.rng.next_1d()]
+        }
+    }
+
     // The Sobol paths stay out of line, so that the independent path inlines into the
     // integrators' loops (a call per random number cost 10 % of all instructions).
     #[inline(never)]

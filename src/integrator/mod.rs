@@ -189,7 +189,7 @@ pub(crate) fn sample_lights(
         left -= m;
         let mut k = 0;
         for _ in 0..m {
-            let [ux, uy, u_sel, _] = sampler.next_4d();
+            let [ux, uy, u_sel] = sampler.next_3d();
             let u = glam::Vec2::new(ux, uy);
             let Some(ls) = scene.lights.sample(si.p, u_sel, u) else {
                 continue;
