@@ -129,8 +129,8 @@ const TRAVERSAL_COST: f32 = 0.5;
 const PARALLEL_MIN: usize = 1 << 14;
 /// Nodes with more primitives than this choose their split from about `SAMPLES` of them, a
 /// fixed stride apart.
-const SAMPLE_MIN: usize = 1 << 12;
-const SAMPLES: usize = 1 << 10;
+const SAMPLE_MIN: usize = 1 << 16;
+const SAMPLES: usize = 1 << 13;
 
 /// Builds the binary tree over `refs`, which it reorders.
 pub fn build(refs: &mut [PrimRef]) -> Bvh {
@@ -346,10 +346,10 @@ fn sweep_node(
         best = (0, 1, area(&refs[0]) + area(&refs[1]));
     } else {
         for (axis, ord) in order.iter_mut().enumerate() {
-            // Insertion sort by centroid, ties by position (a total order: deterministic).
+            // Insertion sort by centroid, stable (ties keep their order: deterministic).
             let mut key = [0f32; SWEEP_MAX];
-            for i in 0..n {
-                let c = refs[i].c2()[axis];
+            for (i, r) in refs.iter().enumerate() {
+                let c = r.c2()[axis];
                 let mut j = i;
                 while j > 0 && key[j - 1] > c {
                     key[j] = key[j - 1];

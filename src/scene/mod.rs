@@ -142,7 +142,9 @@ impl Scene {
     /// Primitive `i` (BVH order) hit before `t_max`: (t, u, v) (spheres: (t, 0, 0)).
     #[inline(always)]
     fn hit(&self, ray: &Ray, i: usize, t_max: f32) -> Option<(f32, f32, f32)> {
-        let [a, b, c] = self.tris[i];
+        debug_assert!(i < self.tris.len());
+        // SAFETY: the BVH's leaves name primitives below tris.len() (Scene::build).
+        let [a, b, c] = unsafe { *self.tris.get_unchecked(i) };
         if a != SPHERE {
             Triangle::new(
                 self.vertex_fast(a),
