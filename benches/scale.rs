@@ -33,7 +33,7 @@ fn main() {
         let t = Instant::now();
         let scene = Scene::build(desc.clone());
         let build = t.elapsed().as_secs_f64();
-        let bytes = scene.memory_bytes() as f64 / scene.prims.len() as f64;
+        let bytes = scene.memory_bytes() as f64 / scene.prim_count() as f64;
         let fs = FileSettings::default();
         let s = mcrt::resolve_settings(
             &fs,
@@ -51,9 +51,9 @@ fn main() {
         let first = *first_rate.get_or_insert(rate);
         println!(
             "| {} | {:.2} | {:.2} | {:.0} | {:.2} | {:.2}× slower |",
-            scene.prims.len(),
+            scene.prim_count(),
             build,
-            scene.prims.len() as f64 / build / 1e6,
+            scene.prim_count() as f64 / build / 1e6,
             bytes,
             rate / 1e6,
             first / rate

@@ -778,7 +778,7 @@ impl Soup {
             spheres.push(s);
         }
         let scene = build(shapes);
-        assert_eq!(scene.prims.len(), tris.len() + spheres.len());
+        assert_eq!(scene.prim_count(), tris.len() + spheres.len());
         Soup {
             scene,
             tris,

@@ -1,32 +1,115 @@
-//! A bounding volume hierarchy built with the binned surface area heuristic and stored as a
-//! flat array of 32-byte nodes in depth-first order.
-//!
-//! The BVH knows nothing about primitives beyond their bounds. It is the build stage: for
-//! traversal it is collapsed into the 4-wide tree of [`super::wide`].
+//! The build stage of the BVH: a binary tree over primitive bounds by the binned surface area
+//! heuristic, collapsed into the 4-wide tree of [`super::wide`] that traversal uses.
 //!
 //! Build: Wald, "On fast Construction of SAH-based Bounding Volume Hierarchies", RT 2007
-//! (binning centroids into 16 buckets per axis and sweeping for the cheapest split).
+//! (binning centroids into 16 buckets per axis and sweeping for the cheapest split), with
+//! Embree's 32-byte primitive references (bounds with the index in the spare lane), in-place
+//! partitioning that also gathers the children's bounds, and a node array laid out in advance
+//! (a subtree over n primitives takes at most 2n − 1 slots: the left child follows its parent
+//! and the right child starts 2·n_left slots after it), so subtrees built in parallel write
+//! straight into their own parts of it. Large nodes choose their split from a fixed sample of
+//! their primitives; the result depends only on the input, never on the thread count.
 
 use crate::geometry::Aabb;
-use glam::Vec3A;
+use glam::{Vec3A, Vec4};
+use std::mem::MaybeUninit;
 
-/// One node. Interior nodes have `count == 0`; their first child follows them in the array
-/// and `offset` is the index of the second. Leaves hold `count` primitives from `offset` on.
+/// A primitive's bounds, with its index in the spare lane of the lower corner (32 bytes).
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(16))]
+pub struct PrimRef {
+    lo: Vec4,
+    hi: Vec4,
+}
+
+impl PrimRef {
+    #[inline]
+    pub fn new(b: &Aabb, index: u32) -> Self {
+        PrimRef {
+            lo: b.min.extend(f32::from_bits(index)),
+            hi: b.max.extend(0.0),
+        }
+    }
+    #[inline(always)]
+    fn lo(&self) -> Vec3A {
+        Vec3A::from_vec4(self.lo)
+    }
+    #[inline(always)]
+    fn hi(&self) -> Vec3A {
+        Vec3A::from_vec4(self.hi)
+    }
+    #[inline]
+    pub fn bounds(&self) -> Aabb {
+        Aabb {
+            min: self.lo(),
+            max: self.hi(),
+        }
+    }
+    #[inline(always)]
+    pub fn index(&self) -> u32 {
+        self.lo.w.to_bits()
+    }
+    /// Twice the centroid (the factor ½ would change no decision).
+    #[inline(always)]
+    fn c2(&self) -> Vec3A {
+        self.lo() + self.hi()
+    }
+}
+
+/// One node of the binary tree (32 bytes). `count` is the number of primitives under it,
+/// with [`LEAF_FLAG`] set on leaves, which hold the primitives `first..first + count`.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(32))]
 pub struct BvhNode {
     pub min: [f32; 3],
-    pub offset: u32,
+    pub first: u32,
     pub max: [f32; 3],
-    pub count: u16,
-    pub axis: u16,
+    pub count: u32,
 }
 
-#[derive(Clone, Debug, Default)]
+pub const LEAF_FLAG: u32 = 1 << 31;
+
+impl BvhNode {
+    #[inline]
+    pub fn is_leaf(&self) -> bool {
+        self.count & LEAF_FLAG != 0
+    }
+    #[inline]
+    pub fn prims(&self) -> u32 {
+        self.count & !LEAF_FLAG
+    }
+    #[inline]
+    pub fn bounds(&self) -> Aabb {
+        Aabb {
+            min: Vec3A::from_array(self.min),
+            max: Vec3A::from_array(self.max),
+        }
+    }
+}
+
+/// The binary tree: node 0 is the root; an inner node `i`'s children are `i + 1` and
+/// `i + 2 · prims(i + 1)`. Slots no node landed in stay uninitialised and are never read.
 pub struct Bvh {
-    pub nodes: Vec<BvhNode>,
+    nodes: Vec<MaybeUninit<BvhNode>>,
     /// `order[i]` is the caller's index of the BVH's i-th primitive.
     pub order: Vec<u32>,
+}
+
+impl Bvh {
+    /// Node `i`; `i` must be the root or a child of a node read through here.
+    #[inline]
+    pub fn node(&self, i: usize) -> &BvhNode {
+        // SAFETY: the build writes the root and both children of every inner node it writes,
+        // at exactly the indices this layout names; only those are read.
+        unsafe { self.nodes[i].assume_init_ref() }
+    }
+    #[inline]
+    pub fn right(&self, i: usize) -> usize {
+        i + 2 * self.node(i + 1).prims() as usize
+    }
+    pub fn is_empty(&self) -> bool {
+        self.order.is_empty()
+    }
 }
 
 const BINS: usize = 16;
@@ -34,124 +117,86 @@ const BINS: usize = 16;
 /// halves the count, so no path can exceed this for fewer than 2³² primitives; traversal
 /// stacks are sized from it.
 pub const MAX_DEPTH: usize = 80;
+/// Leaves hold at most this many primitives.
 const MAX_LEAF: usize = 8;
+
 /// Cost of visiting a node relative to one primitive test. Measured with callgrind on the
 /// TNCG15 room (32×32, 64 spp): 1.0 → 837 M instructions, 0.5 → 765 M, 0.25 and 0.125 the
 /// same as 0.5; 2.0 → 1319 M. 0.5 is also pbrt-v4's value.
 const TRAVERSAL_COST: f32 = 0.5;
 
-struct BuildRef {
-    bounds: Aabb,
-    centroid: Vec3A,
-    index: u32,
-}
-
-/// Subtrees with more primitives than this are built in parallel (rayon::join); below it the
-/// recursion stays on one thread and writes into one node array.
+/// Subtrees with more primitives than this are built in parallel (rayon::join).
 const PARALLEL_MIN: usize = 1 << 14;
+/// Nodes with more primitives than this choose their split from about `SAMPLES` of them, a
+/// fixed stride apart.
+const SAMPLE_MIN: usize = 1 << 16;
+const SAMPLES: usize = 1 << 13;
 
-/// Per-axis bins of one node: primitive counts, primitive bounds and centroid bounds.
-struct Bins {
-    count: [[u32; BINS]; 3],
-    bounds: [[Aabb; BINS]; 3],
-    centroids: [[Aabb; BINS]; 3],
-}
-
-impl Bvh {
-    /// Builds over the given primitive bounds.
-    pub fn build(bounds: &[Aabb]) -> Bvh {
-        use rayon::prelude::*;
-        let mut refs: Vec<BuildRef> = bounds
-            .par_iter()
-            .enumerate()
-            .map(|(i, b)| BuildRef {
-                bounds: *b,
-                centroid: b.centroid(),
-                index: i as u32,
-            })
-            .collect();
-        if refs.is_empty() {
-            return Bvh {
-                nodes: vec![BvhNode {
-                    min: [f32::INFINITY; 3],
-                    offset: 0,
-                    max: [f32::NEG_INFINITY; 3],
-                    count: 0,
-                    axis: 0,
-                }],
-                // An empty leaf: traversal checks `order`.
-                order: Vec::new(),
-            };
-        }
-        let (b, cb) = bounds_of(&refs);
-        let nodes = build_subtree(&mut refs, 0, 0, b, cb);
-        Bvh {
-            nodes,
-            order: refs.iter().map(|r| r.index).collect(),
-        }
+/// Builds the binary tree over `refs`, which it reorders.
+pub fn build(refs: &mut [PrimRef]) -> Bvh {
+    let n = refs.len();
+    let mut nodes: Vec<MaybeUninit<BvhNode>> = Vec::with_capacity((2 * n).max(1));
+    // SAFETY: MaybeUninit needs no initialisation.
+    unsafe { nodes.set_len((2 * n).max(1)) };
+    if n > 0 {
+        let (b, cb) = bounds_of(refs);
+        build_node(&mut nodes, refs, 0, 0, b, cb);
     }
-
-    pub fn bounds(&self) -> Aabb {
-        let n = &self.nodes[0];
-        Aabb {
-            min: Vec3A::from_array(n.min),
-            max: Vec3A::from_array(n.max),
-        }
-    }
-
-    pub fn depth(&self) -> usize {
-        fn rec(b: &Bvh, i: usize) -> usize {
-            let n = &b.nodes[i];
-            if n.count > 0 || b.order.is_empty() {
-                1
-            } else {
-                1 + rec(b, i + 1).max(rec(b, n.offset as usize))
-            }
-        }
-        rec(self, 0)
+    Bvh {
+        nodes,
+        order: refs.iter().map(|r| r.index()).collect(),
     }
 }
 
-/// Bounds of the primitives and of their centroids.
-fn bounds_of(refs: &[BuildRef]) -> (Aabb, Aabb) {
+/// Bounds of the primitives and of their (doubled) centroids.
+fn bounds_of(refs: &[PrimRef]) -> (Aabb, Aabb) {
     let mut b = Aabb::EMPTY;
     let mut cb = Aabb::EMPTY;
     for r in refs {
-        b.grow(&r.bounds);
-        cb.grow_point(r.centroid);
+        b.min = b.min.min(r.lo());
+        b.max = b.max.max(r.hi());
+        cb.grow_point(r.c2());
     }
     (b, cb)
-}
-
-/// Builds the subtree over `refs` (the primitives `first..first + refs.len()` of the final
-/// order) into a node array of its own, whose inner nodes' offsets count from its start.
-fn build_subtree(
-    refs: &mut [BuildRef],
-    first: usize,
-    depth: usize,
-    bounds: Aabb,
-    cbounds: Aabb,
-) -> Vec<BvhNode> {
-    let mut nodes = Vec::with_capacity(2 * refs.len());
-    build_node(&mut nodes, refs, first, depth, bounds, cbounds);
-    nodes
 }
 
 fn leaf(b: &Aabb, first: usize, count: usize) -> BvhNode {
     BvhNode {
         min: b.min.to_array(),
-        offset: first as u32,
+        first: first as u32,
         max: b.max.to_array(),
-        count: count as u16,
-        axis: 0,
+        count: count as u32 | LEAF_FLAG,
     }
 }
 
-/// Appends the subtree over `refs` to `nodes`. `bounds` and `cbounds` are the bounds of the
-/// primitives and of their centroids (the parent's bins give them without another pass).
+/// Bin indices of a scaled centroid offset (non-negative), clamped to `last`.
+#[inline(always)]
+fn bin3(v: Vec3A, last: f32) -> [usize; 3] {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::*;
+        // SAFETY: SSE2 is part of x86-64.
+        unsafe {
+            let v = _mm_min_ps(v.into(), _mm_set1_ps(last));
+            let i = _mm_cvttps_epi32(v);
+            let mut out = [0i32; 4];
+            _mm_storeu_si128(out.as_mut_ptr() as *mut __m128i, i);
+            [out[0] as usize, out[1] as usize, out[2] as usize]
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let b = v.min(Vec3A::splat(last));
+        [b.x as usize, b.y as usize, b.z as usize]
+    }
+}
+
+/// Writes the subtree over `refs` (the primitives `first..first + refs.len()` of the final
+/// order) into `nodes`, its root at `nodes[0]`. `bounds` and `cbounds` are the bounds of the
+/// primitives and of their doubled centroids.
 fn build_node(
-    nodes: &mut Vec<BvhNode>,
-    refs: &mut [BuildRef],
+    nodes: &mut [MaybeUninit<BvhNode>],
+    refs: &mut [PrimRef],
     first: usize,
     depth: usize,
     bounds: Aabb,
@@ -159,51 +204,55 @@ fn build_node(
 ) {
     let n = refs.len();
     if n == 1 {
-        nodes.push(leaf(&bounds, first, n));
+        nodes[0].write(leaf(&bounds, first, n));
         return;
     }
     let cext = cbounds.extent();
-    let widest = if cext.x >= cext.y && cext.x >= cext.z {
-        0
-    } else if cext.y >= cext.z {
-        1
-    } else {
-        2
-    };
-    if depth >= MAX_DEPTH - 32 {
-        // Degenerate input (the SAH keeps peeling off few primitives): split at the object
-        // median along the widest centroid axis.
+    if depth >= MAX_DEPTH - 32 || cext.max_element() <= 0.0 {
+        if n <= MAX_LEAF {
+            nodes[0].write(leaf(&bounds, first, n));
+            return;
+        }
+        // Degenerate input (the SAH keeps peeling off few primitives, or all centroids
+        // coincide): split at the object median along the widest centroid axis.
+        let widest = widest_axis(cext);
         let mid = n / 2;
-        refs.select_nth_unstable_by(mid, |a, b| {
-            a.centroid[widest].total_cmp(&b.centroid[widest])
-        });
-        return push_interior(nodes, refs, first, depth, &bounds, widest, mid, None);
+        refs.select_nth_unstable_by(mid, |a, b| a.c2()[widest].total_cmp(&b.c2()[widest]));
+        let (l, r) = refs.split_at(mid);
+        let (lb, lc) = bounds_of(l);
+        let (rb, rc) = bounds_of(r);
+        return interior(nodes, refs, first, depth, &bounds, mid, (lb, lc), (rb, rc));
     }
-    // Bin the centroids along all three axes in one pass over the primitives.
+    if n <= SWEEP_MAX {
+        return sweep_node(nodes, refs, first, depth, &bounds);
+    }
+    // Bin the centroids along all three axes in one pass (over a sample of a large node);
+    // fewer bins for fewer primitives.
+    let nb = if n <= 64 { 8 } else { BINS };
     let scale = Vec3A::select(
         cext.cmpgt(Vec3A::ZERO),
-        Vec3A::splat(BINS as f32 * (1.0 - 1e-6)) / cext,
+        Vec3A::splat(nb as f32 * (1.0 - 1e-6)) / cext,
         Vec3A::ZERO,
     );
-    let bin_of = |c: Vec3A| {
-        let b = ((c - cbounds.min) * scale)
-            .as_uvec3()
-            .min(glam::UVec3::splat(BINS as u32 - 1));
-        [b.x as usize, b.y as usize, b.z as usize]
-    };
-    let mut bins = Bins {
-        count: [[0; BINS]; 3],
-        bounds: [[Aabb::EMPTY; BINS]; 3],
-        centroids: [[Aabb::EMPTY; BINS]; 3],
-    };
-    for r in refs.iter() {
-        let b = bin_of(r.centroid);
-        #[allow(clippy::needless_range_loop)] // three parallel arrays indexed by axis
+    let cmin = cbounds.min;
+    let last = (nb - 1) as f32;
+    let stride = if n > SAMPLE_MIN { n / SAMPLES } else { 1 };
+    // Two sets of bins, for even and odd primitives: neighbours often share a bin, and one
+    // set would make each update wait for the previous one's store.
+    let mut count = [[[0u32; BINS]; 3]; 2];
+    let mut bins = [[[Aabb::EMPTY; BINS]; 3]; 2];
+    let mut samples = 0;
+    for (k, r) in refs.iter().step_by(stride).enumerate() {
+        let set = k & 1;
+        let (lo, hi) = (r.lo(), r.hi());
+        let b = bin3((lo + hi - cmin) * scale, last);
         for axis in 0..3 {
-            bins.count[axis][b[axis]] += 1;
-            bins.bounds[axis][b[axis]].grow(&r.bounds);
-            bins.centroids[axis][b[axis]].grow_point(r.centroid);
+            count[set][axis][b[axis]] += 1;
+            let bb = &mut bins[set][axis][b[axis]];
+            bb.min = bb.min.min(lo);
+            bb.max = bb.max.max(hi);
         }
+        samples += 1;
     }
     // Sweep each axis for the cheapest split (right-hand areas first, then from the left).
     let mut best: Option<(usize, usize, f32)> = None; // (axis, bin, cost)
@@ -211,21 +260,24 @@ fn build_node(
         if cext[axis] <= 0.0 {
             continue;
         }
+        let [(c0, b0), (c1, b1)] = [0, 1].map(|s| (&count[s][axis], &bins[s][axis]));
         let mut right_area = [0.0f32; BINS];
         let mut right_count = [0u32; BINS];
         let mut acc = Aabb::EMPTY;
         let mut cnt = 0;
-        for i in (1..BINS).rev() {
-            acc.grow(&bins.bounds[axis][i]);
-            cnt += bins.count[axis][i];
+        for i in (1..nb).rev() {
+            acc.grow(&b0[i]);
+            acc.grow(&b1[i]);
+            cnt += c0[i] + c1[i];
             right_area[i] = acc.surface_area();
             right_count[i] = cnt;
         }
         let mut acc = Aabb::EMPTY;
         let mut cnt = 0;
-        for i in 0..BINS - 1 {
-            acc.grow(&bins.bounds[axis][i]);
-            cnt += bins.count[axis][i];
+        for i in 0..nb - 1 {
+            acc.grow(&b0[i]);
+            acc.grow(&b1[i]);
+            cnt += c0[i] + c1[i];
             if cnt == 0 || right_count[i + 1] == 0 {
                 continue;
             }
@@ -237,96 +289,204 @@ fn build_node(
         }
     }
     let area = bounds.surface_area().max(f32::MIN_POSITIVE);
-    let leaf_cost = n as f32;
-    match best.map(|(axis, bin, cost)| (axis, bin, TRAVERSAL_COST + cost / area)) {
-        Some((axis, bin, cost)) if cost < leaf_cost || n > MAX_LEAF => {
-            let mid = partition(refs, |r| bin_of(r.centroid)[axis] <= bin);
-            // The children's bounds are the unions of their bins'.
-            let union = |range: std::ops::Range<usize>| {
-                let (mut b, mut c) = (Aabb::EMPTY, Aabb::EMPTY);
-                for i in range {
-                    b.grow(&bins.bounds[axis][i]);
-                    c.grow(&bins.centroids[axis][i]);
-                }
-                (b, c)
-            };
-            let left_count: u32 = bins.count[axis][..=bin].iter().sum();
-            // (The partition falls back to a median split only if one side were empty, which
-            // the sweep excludes; then the bins would not describe the children.)
-            let children =
-                (mid == left_count as usize).then(|| (union(0..bin + 1), union(bin + 1..BINS)));
-            push_interior(nodes, refs, first, depth, &bounds, axis, mid, children);
+    let sampled = samples as f32 / n as f32;
+    match best {
+        Some((axis, bin, cost)) if split_pays(n, area, cost / sampled) => {
+            let (mid, l, r) = partition(refs, |c| bin3((c - cmin) * scale, last)[axis] <= bin);
+            if mid == 0 || mid == n {
+                // Cannot happen (the sampled bins held primitives on both sides); kept so
+                // that the node layout can never underflow.
+                return interior_median(nodes, refs, first, depth, &bounds);
+            }
+            interior(nodes, refs, first, depth, &bounds, mid, l, r)
         }
-        // All centroids coincide: split the list in half so leaves stay small.
-        None if n > MAX_LEAF => push_interior(nodes, refs, first, depth, &bounds, 0, n / 2, None),
-        _ => nodes.push(leaf(&bounds, first, n)),
+        // (Without a split every centroid lies in one bin along every axis; rare but
+        // possible with centroids a few ulps apart.)
+        None if n > MAX_LEAF => interior_median(nodes, refs, first, depth, &bounds),
+        _ => {
+            nodes[0].write(leaf(&bounds, first, n));
+        }
     }
 }
 
-/// Emits an inner node over `refs`, split at `mid` along `axis`, and builds its children
-/// (in parallel when they are large). `children` gives their bounds and centroid bounds
-/// when the split came from the bins.
-#[allow(clippy::too_many_arguments)]
-fn push_interior(
-    nodes: &mut Vec<BvhNode>,
-    refs: &mut [BuildRef],
+/// Whether splitting a node of `n` primitives and surface `area`, whose children's SAH sum
+/// (count times area) is `children`, beats a leaf by the SAH, or the node is too large for
+/// a leaf.
+#[inline]
+fn split_pays(n: usize, area: f32, children: f32) -> bool {
+    n > MAX_LEAF || TRAVERSAL_COST + children / area < n as f32
+}
+
+/// Nodes of at most this many primitives find the exact SAH split (the primitives sorted
+/// along each axis) instead of binning, whose fixed cost dominates at this size.
+const SWEEP_MAX: usize = 12;
+
+/// The exact SAH split of a small node over all three axes.
+fn sweep_node(
+    nodes: &mut [MaybeUninit<BvhNode>],
+    refs: &mut [PrimRef],
     first: usize,
     depth: usize,
     bounds: &Aabb,
-    axis: usize,
-    mid: usize,
-    children: Option<((Aabb, Aabb), (Aabb, Aabb))>,
 ) {
-    let node_index = nodes.len();
-    nodes.push(BvhNode {
+    let n = refs.len();
+    let mut order = [[0u8; SWEEP_MAX]; 3];
+    let mut right_area = [0f32; SWEEP_MAX];
+    let mut best = (0, 0, f32::INFINITY); // (axis, left count, cost)
+    if n == 2 {
+        // One split only, whatever the axis.
+        let area = |r: &PrimRef| {
+            Aabb {
+                min: r.lo(),
+                max: r.hi(),
+            }
+            .surface_area()
+        };
+        order[0][1] = 1;
+        best = (0, 1, area(&refs[0]) + area(&refs[1]));
+    } else {
+        for (axis, ord) in order.iter_mut().enumerate() {
+            // Insertion sort by centroid, stable (ties keep their order: deterministic).
+            let mut key = [0f32; SWEEP_MAX];
+            for (i, r) in refs.iter().enumerate() {
+                let c = r.c2()[axis];
+                let mut j = i;
+                while j > 0 && key[j - 1] > c {
+                    key[j] = key[j - 1];
+                    ord[j] = ord[j - 1];
+                    j -= 1;
+                }
+                key[j] = c;
+                ord[j] = i as u8;
+            }
+            let mut acc = Aabb::EMPTY;
+            for k in (1..n).rev() {
+                let r = &refs[ord[k] as usize];
+                acc.min = acc.min.min(r.lo());
+                acc.max = acc.max.max(r.hi());
+                right_area[k] = acc.surface_area();
+            }
+            let mut acc = Aabb::EMPTY;
+            for k in 1..n {
+                let r = &refs[ord[k - 1] as usize];
+                acc.min = acc.min.min(r.lo());
+                acc.max = acc.max.max(r.hi());
+                let cost = k as f32 * acc.surface_area() + (n - k) as f32 * right_area[k];
+                if cost < best.2 {
+                    best = (axis, k, cost);
+                }
+            }
+        }
+    }
+    let (axis, mid, cost) = best;
+    let area = bounds.surface_area().max(f32::MIN_POSITIVE);
+    if mid == 0 || !split_pays(n, area, cost) {
+        if n <= MAX_LEAF {
+            nodes[0].write(leaf(bounds, first, n));
+            return;
+        }
+        // (Only with non-finite bounds.)
+        return interior_median(nodes, refs, first, depth, bounds);
+    }
+    let mut tmp = [refs[0]; SWEEP_MAX];
+    tmp[..n].copy_from_slice(refs);
+    for (r, &o) in refs.iter_mut().zip(&order[axis][..n]) {
+        *r = tmp[o as usize];
+    }
+    let (l, r) = refs.split_at(mid);
+    let (lb, lc) = bounds_of(l);
+    let (rb, rc) = bounds_of(r);
+    interior(nodes, refs, first, depth, bounds, mid, (lb, lc), (rb, rc))
+}
+
+/// An inner node split in the middle of `refs` as they lie.
+fn interior_median(
+    nodes: &mut [MaybeUninit<BvhNode>],
+    refs: &mut [PrimRef],
+    first: usize,
+    depth: usize,
+    bounds: &Aabb,
+) {
+    let mid = refs.len() / 2;
+    let (l, r) = refs.split_at(mid);
+    let (lb, lc) = bounds_of(l);
+    let (rb, rc) = bounds_of(r);
+    interior(nodes, refs, first, depth, bounds, mid, (lb, lc), (rb, rc))
+}
+
+fn widest_axis(e: Vec3A) -> usize {
+    if e.x >= e.y && e.x >= e.z {
+        0
+    } else if e.y >= e.z {
+        1
+    } else {
+        2
+    }
+}
+
+/// Writes an inner node over `refs`, split at `mid`, and builds its children (in parallel
+/// when both are large).
+#[allow(clippy::too_many_arguments)]
+fn interior(
+    nodes: &mut [MaybeUninit<BvhNode>],
+    refs: &mut [PrimRef],
+    first: usize,
+    depth: usize,
+    bounds: &Aabb,
+    mid: usize,
+    (lb, lc): (Aabb, Aabb),
+    (rb, rc): (Aabb, Aabb),
+) {
+    nodes[0].write(BvhNode {
         min: bounds.min.to_array(),
-        offset: 0,
+        first: first as u32,
         max: bounds.max.to_array(),
-        count: 0,
-        axis: axis as u16,
+        count: refs.len() as u32,
     });
     let (left, right) = refs.split_at_mut(mid);
-    let ((lb, lc), (rb, rc)) = children.unwrap_or_else(|| (bounds_of(left), bounds_of(right)));
+    let (ln, rn) = nodes[1..].split_at_mut(2 * mid - 1);
     if left.len().min(right.len()) >= PARALLEL_MIN {
-        let (l, r) = rayon::join(
-            || build_subtree(left, first, depth + 1, lb, lc),
-            || build_subtree(right, first + mid, depth + 1, rb, rc),
+        rayon::join(
+            || build_node(ln, left, first, depth + 1, lb, lc),
+            || build_node(rn, right, first + mid, depth + 1, rb, rc),
         );
-        append(nodes, &l);
-        nodes[node_index].offset = nodes.len() as u32;
-        append(nodes, &r);
     } else {
-        build_node(nodes, left, first, depth + 1, lb, lc);
-        nodes[node_index].offset = nodes.len() as u32;
-        build_node(nodes, right, first + mid, depth + 1, rb, rc);
+        build_node(ln, left, first, depth + 1, lb, lc);
+        build_node(rn, right, first + mid, depth + 1, rb, rc);
     }
 }
 
-/// Appends a subtree built on its own, moving its inner nodes' child offsets to its place.
-fn append(nodes: &mut Vec<BvhNode>, sub: &[BvhNode]) {
-    let base = nodes.len() as u32;
-    nodes.extend(sub.iter().map(|n| {
-        let mut n = *n;
-        if n.count == 0 {
-            n.offset += base;
-        }
-        n
-    }));
-}
-
-/// Stable-enough in-place partition; returns the number of elements satisfying `pred`,
-/// falling back to a median split if every element lands on one side.
-fn partition<F: Fn(&BuildRef) -> bool>(refs: &mut [BuildRef], pred: F) -> usize {
-    let mut i = 0;
-    for j in 0..refs.len() {
-        if pred(&refs[j]) {
-            refs.swap(i, j);
+/// In-place partition by `goes_left(doubled centroid)`; returns the split index and the
+/// bounds and centroid bounds of both sides. Neither side is empty when the split came from
+/// bins holding primitives on both sides.
+fn partition<F: Fn(Vec3A) -> bool>(
+    refs: &mut [PrimRef],
+    goes_left: F,
+) -> (usize, (Aabb, Aabb), (Aabb, Aabb)) {
+    let (mut lb, mut lc, mut rb, mut rc) = (Aabb::EMPTY, Aabb::EMPTY, Aabb::EMPTY, Aabb::EMPTY);
+    let grow = |b: &mut Aabb, c: &mut Aabb, r: &PrimRef| {
+        b.min = b.min.min(r.lo());
+        b.max = b.max.max(r.hi());
+        c.grow_point(r.c2());
+    };
+    let (mut i, mut j) = (0, refs.len());
+    loop {
+        while i < j && goes_left(refs[i].c2()) {
+            grow(&mut lb, &mut lc, &refs[i]);
             i += 1;
         }
+        while i < j && !goes_left(refs[j - 1].c2()) {
+            grow(&mut rb, &mut rc, &refs[j - 1]);
+            j -= 1;
+        }
+        if i >= j {
+            break;
+        }
+        refs.swap(i, j - 1);
+        grow(&mut lb, &mut lc, &refs[i]);
+        grow(&mut rb, &mut rc, &refs[j - 1]);
+        i += 1;
+        j -= 1;
     }
-    if i == 0 || i == refs.len() {
-        refs.len() / 2
-    } else {
-        i
-    }
+    (i, (lb, lc), (rb, rc))
 }

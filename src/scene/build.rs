@@ -1,90 +1,128 @@
-//! Turning a scene description into the scene the integrators trace: primitives in BVH order,
-//! materials, and one area light per emissive triangle or sphere.
+//! Turning a scene description into the scene the integrators trace: indexed triangles and
+//! spheres in BVH order, materials, and one area light per emissive triangle or sphere.
 
 use super::{
-    desc::GeometryDesc, desc::LightDesc, Primitive, Scene, SceneDesc, Shape, NO_LIGHT, NO_NORMALS,
+    desc::GeometryDesc, desc::LightDesc, MeshAttrs, Scene, SceneDesc, META_ATTRS, META_EMITTER,
+    META_MATERIAL, SPHERE,
 };
-use crate::accel::{Bvh, WideBvh};
+use crate::accel::bvh::{self, PrimRef};
+use crate::accel::WideBvh;
 use crate::geometry::{Aabb, Sphere, Triangle};
 use crate::light::{AreaLight, LightShape, Lights, OtherLight};
-use glam::{Vec2, Vec3A};
+use glam::Vec3A;
+use rayon::prelude::*;
 
 impl Scene {
     pub fn build(desc: SceneDesc) -> Scene {
-        let mut prims = Vec::new();
-        let mut bounds = Vec::new();
-        let mut lights = Vec::new();
+        // Primitives in the description's order: vertex indices (or a sphere), material and
+        // flags, and bounds.
+        let mut tris: Vec<[u32; 3]> = Vec::new();
+        let mut meta: Vec<u32> = Vec::new();
+        let mut positions = Vec::new();
         let mut normals = Vec::new();
         let mut uvs = Vec::new();
+        let mut attrs = Vec::new();
+        let mut spheres = Vec::new();
+        let mut lights = Vec::new();
+        // (primitive, light) of the emitting primitives, by primitive.
+        let mut emitting: Vec<(u32, u32)> = Vec::new();
         for shape in &desc.shapes {
             let emission = shape.emission.filter(|e| e.max_element() > 0.0);
+            assert!(shape.material <= META_MATERIAL, "too many materials");
+            let mut m = shape.material;
+            if emission.is_some() {
+                m |= META_EMITTER;
+            }
             match &shape.geometry {
                 GeometryDesc::Mesh(mesh) => {
-                    let mesh_lights = match emission {
-                        Some(e) => mesh_lights(mesh, e, &mut lights),
-                        None => Vec::new(),
-                    };
-                    for (k, idx) in mesh.indices.iter().enumerate() {
-                        let [a, b, c] = idx.map(|i| Vec3A::from(mesh.positions[i as usize]));
-                        let tri = Triangle::new(a, b, c);
-                        let area = tri.area();
-                        // Degenerate triangles can never be hit and cannot emit; drop them.
-                        if !(area > 0.0) {
-                            continue;
-                        }
-                        let nidx = if mesh.normals.is_some() || mesh.uvs.is_some() {
-                            let n = tri.normal_unnormalized().normalize();
-                            normals.push(match &mesh.normals {
-                                Some(ns) => idx.map(|i| Vec3A::from(ns[i as usize])),
-                                None => [n; 3],
-                            });
-                            uvs.push(match &mesh.uvs {
-                                Some(ts) => idx.map(|i| ts[i as usize]),
-                                None => [Vec2::ZERO, Vec2::X, Vec2::Y],
-                            });
-                            (normals.len() - 1) as u32
-                        } else {
-                            NO_NORMALS
-                        };
-                        let light = mesh_lights.get(k).copied().unwrap_or(NO_LIGHT);
-                        bounds.push(Aabb::from_points(&[a, b, c]));
-                        prims.push(Primitive {
-                            shape: Shape::Triangle(tri, nidx),
-                            material: shape.material,
-                            light,
+                    let base = positions.len() as u32;
+                    assert!(
+                        positions.len() + mesh.positions.len() < SPHERE as usize,
+                        "too many vertices"
+                    );
+                    if mesh.normals.is_some() || mesh.uvs.is_some() {
+                        m |= META_ATTRS;
+                        attrs.push(MeshAttrs {
+                            first_vertex: base,
+                            normals: mesh.normals.as_ref().map_or(u32::MAX, |ns| {
+                                normals.extend_from_slice(ns);
+                                (normals.len() - ns.len()) as u32
+                            }),
+                            uvs: mesh.uvs.as_ref().map_or(u32::MAX, |ts| {
+                                uvs.extend_from_slice(ts);
+                                (uvs.len() - ts.len()) as u32
+                            }),
                         });
                     }
+                    positions.extend_from_slice(&mesh.positions);
+                    let vertex = |i: u32| Vec3A::from(mesh.positions[i as usize]);
+                    // Degenerate triangles can never be hit and cannot emit; drop them.
+                    let kept: Vec<[u32; 3]> = mesh
+                        .indices
+                        .par_iter()
+                        .with_min_len(1 << 12)
+                        .filter(|idx| {
+                            let [a, b, c] = idx.map(vertex);
+                            Triangle::new(a, b, c).area() > 0.0
+                        })
+                        .map(|idx| idx.map(|i| i + base))
+                        .collect();
+                    if let Some(e) = emission {
+                        let kept_tris: Vec<Triangle> = kept
+                            .iter()
+                            .map(|idx| {
+                                let [a, b, c] = idx.map(|i| vertex(i - base));
+                                Triangle::new(a, b, c)
+                            })
+                            .collect();
+                        for (k, light) in mesh_lights(&kept_tris, e, &mut lights).enumerate() {
+                            emitting.push(((tris.len() + k) as u32, light));
+                        }
+                    }
+                    meta.resize(meta.len() + kept.len(), m);
+                    tris.extend_from_slice(&kept);
                 }
                 GeometryDesc::Sphere { center, radius } => {
                     let s = Sphere {
                         center: (*center).into(),
                         radius: *radius,
                     };
-                    let light = match emission {
-                        Some(e) => {
-                            lights.push(AreaLight::new(LightShape::Sphere(s), e));
-                            (lights.len() - 1) as u32
-                        }
-                        None => NO_LIGHT,
-                    };
-                    let r = Vec3A::splat(*radius);
-                    bounds.push(Aabb {
-                        min: s.center - r,
-                        max: s.center + r,
-                    });
-                    prims.push(Primitive {
-                        shape: Shape::Sphere(s),
-                        material: shape.material,
-                        light,
-                    });
+                    if let Some(e) = emission {
+                        lights.push(AreaLight::new(LightShape::Sphere(s), e));
+                        emitting.push((tris.len() as u32, (lights.len() - 1) as u32));
+                    }
+                    tris.push([SPHERE, spheres.len() as u32, 0]);
+                    meta.push(m);
+                    spheres.push(s);
                 }
             }
         }
-        let mut world = Aabb::EMPTY;
-        for b in &bounds {
-            world = Aabb::union(&world, b);
-        }
-        let radius = if bounds.is_empty() {
+        assert!(tris.len() < 1 << 27, "too many primitives");
+        let bounds_of = |idx: &[u32; 3]| {
+            if idx[0] == SPHERE {
+                let s: &Sphere = &spheres[idx[1] as usize];
+                let r = Vec3A::splat(s.radius);
+                Aabb {
+                    min: s.center - r,
+                    max: s.center + r,
+                }
+            } else {
+                Aabb::from_points(&idx.map(|i| Vec3A::from(positions[i as usize])))
+            }
+        };
+        let mut refs: Vec<PrimRef> = tris
+            .par_iter()
+            .enumerate()
+            .with_min_len(1 << 12)
+            .map(|(i, idx)| PrimRef::new(&bounds_of(idx), i as u32))
+            .collect();
+        // (Minimum and maximum are exact, so any grouping of this reduction gives the same.)
+        let world = refs
+            .par_iter()
+            .with_min_len(1 << 12)
+            .map(PrimRef::bounds)
+            .reduce(|| Aabb::EMPTY, |a, b| Aabb::union(&a, &b));
+        let radius = if tris.is_empty() {
             1.0
         } else {
             0.5 * (world.max - world.min).length()
@@ -110,15 +148,50 @@ impl Scene {
                 LightDesc::Constant { radiance } => OtherLight::Constant { radiance },
             })
             .collect();
-        let bvh = Bvh::build(&bounds);
-        let prims = bvh.order.iter().map(|&i| prims[i as usize]).collect();
+        drop(desc.shapes);
+        // The padding vertex that `Scene::vertex_fast` may read past the last one.
+        positions.push(glam::Vec3::ZERO);
+        let bvh = bvh::build(&mut refs);
+        drop(refs);
+        let wide = WideBvh::from_binary(&bvh, &|i| tris[i as usize][0] == SPHERE);
+        let order = &bvh.order;
+        let tris: Vec<[u32; 3]> = order
+            .par_iter()
+            .with_min_len(1 << 12)
+            .map(|&i| tris[i as usize])
+            .collect();
+        let meta: Vec<u32> = order
+            .par_iter()
+            .with_min_len(1 << 12)
+            .map(|&i| meta[i as usize])
+            .collect();
+        // `emitting` is sorted by primitive.
+        let emitters = if emitting.is_empty() {
+            Vec::new()
+        } else {
+            order
+                .par_iter()
+                .enumerate()
+                .with_min_len(1 << 12)
+                .filter(|&(i, _)| meta[i] & META_EMITTER != 0)
+                .map(|(i, p)| {
+                    let k = emitting.binary_search_by_key(p, |&(q, _)| q).unwrap();
+                    (i as u32, emitting[k].1)
+                })
+                .collect()
+        };
         Scene {
-            prims,
-            bvh: WideBvh::from_binary(&bvh),
-            materials: desc.materials,
-            lights: Lights::with_others(lights, others, radius),
+            tris,
+            meta,
+            positions,
+            spheres,
+            emitters,
             normals,
             uvs,
+            attrs,
+            bvh: wide,
+            materials: desc.materials,
+            lights: Lights::with_others(lights, others, radius),
             textures: desc.textures,
             cameras: desc.cameras,
             desc_settings: desc.settings,
@@ -126,40 +199,34 @@ impl Scene {
     }
 }
 
-/// The area lights of an emissive mesh, and the light of each of its triangles (NO_LIGHT for
-/// degenerate ones). Consecutive triangles that form a parallelogram (a quad split along a
-/// diagonal, as OBJ, PLY and Mitsuba's rectangles give them) share one parallelogram light.
+/// The area lights of an emissive mesh's (non-degenerate) triangles, pushed to `lights`, and
+/// the light of each triangle. Consecutive triangles that form a parallelogram (a quad split
+/// along a diagonal, as OBJ, PLY and Mitsuba's rectangles give them) share one parallelogram
+/// light.
 fn mesh_lights(
-    mesh: &crate::geometry::mesh::TriangleMesh,
+    tris: &[Triangle],
     e: crate::Color,
     lights: &mut Vec<AreaLight>,
-) -> Vec<u32> {
-    let tri = |k: usize| {
-        let [a, b, c] = mesh.indices[k].map(|i| Vec3A::from(mesh.positions[i as usize]));
-        Triangle::new(a, b, c)
-    };
-    let n = mesh.indices.len();
-    let mut ids = vec![NO_LIGHT; n];
+) -> impl Iterator<Item = u32> {
+    let mut ids = Vec::with_capacity(tris.len());
     let mut k = 0;
-    while k < n {
-        let t = tri(k);
-        if !(t.area() > 0.0) {
-            k += 1;
-            continue;
-        }
-        if k + 1 < n {
-            let t2 = tri(k + 1);
-            if let Some(l) = AreaLight::parallelogram(&t, &t2, e).filter(|_| t2.area() > 0.0) {
+    while k < tris.len() {
+        let pair = tris
+            .get(k + 1)
+            .and_then(|t2| AreaLight::parallelogram(&tris[k], t2, e));
+        let id = lights.len() as u32;
+        match pair {
+            Some(l) => {
                 lights.push(l);
-                ids[k] = (lights.len() - 1) as u32;
-                ids[k + 1] = ids[k];
+                ids.extend([id, id]);
                 k += 2;
-                continue;
+            }
+            None => {
+                lights.push(AreaLight::new(LightShape::Triangle(tris[k]), e));
+                ids.push(id);
+                k += 1;
             }
         }
-        lights.push(AreaLight::new(LightShape::Triangle(t), e));
-        ids[k] = (lights.len() - 1) as u32;
-        k += 1;
     }
-    ids
+    ids.into_iter()
 }

@@ -25,21 +25,25 @@ use crate::material::Material;
 use glam::{Vec2, Vec3A};
 
 pub const NO_LIGHT: u32 = u32::MAX;
-pub const NO_NORMALS: u32 = u32::MAX;
 
-#[derive(Clone, Copy, Debug)]
-pub enum Shape {
-    /// A triangle and the index of its vertex normals in `Scene::normals` (or NO_NORMALS).
-    Triangle(Triangle, u32),
-    Sphere(Sphere),
-}
+/// `Scene::tris` entry of a sphere: `[SPHERE, index into Scene::spheres, 0]`.
+pub const SPHERE: u32 = u32::MAX;
+/// `Scene::meta` flags: the primitive emits (its light is in `Scene::emitters`)...
+pub const META_EMITTER: u32 = 1 << 31;
+/// ...its mesh has vertex normals or texture coordinates (in `Scene::attrs`).
+pub const META_ATTRS: u32 = 1 << 30;
+/// The material index is what remains.
+pub const META_MATERIAL: u32 = (1 << 30) - 1;
 
+/// Where a mesh's vertex normals and texture coordinates lie (meshes with either only).
 #[derive(Clone, Copy, Debug)]
-pub struct Primitive {
-    pub shape: Shape,
-    pub material: u32,
-    /// Index into the lights if this primitive emits, else NO_LIGHT.
-    pub light: u32,
+pub struct MeshAttrs {
+    /// The mesh's first vertex in `Scene::positions`.
+    pub first_vertex: u32,
+    /// Its first vertex's normal in `Scene::normals`, or u32::MAX without normals.
+    pub normals: u32,
+    /// Its first vertex's texture coordinates in `Scene::uvs`, or u32::MAX without.
+    pub uvs: u32,
 }
 
 /// A ray's hit on a surface, with everything shading needs.
@@ -79,37 +83,92 @@ impl Interaction {
 }
 
 pub struct Scene {
-    /// Primitives in BVH order.
-    pub prims: Vec<Primitive>,
+    /// Per primitive, in BVH order: a triangle's three indices into `positions`, or
+    /// `[SPHERE, index into spheres, 0]`.
+    pub(crate) tris: Vec<[u32; 3]>,
+    /// Per primitive, in BVH order: material index and the META_* flags.
+    pub(crate) meta: Vec<u32>,
+    /// Vertex positions of all meshes, one after the other, and one padding vertex.
+    pub(crate) positions: Vec<glam::Vec3>,
+    pub(crate) spheres: Vec<Sphere>,
+    /// (primitive, area light) of each emitting primitive, by primitive.
+    pub(crate) emitters: Vec<(u32, u32)>,
+    /// Vertex normals and texture coordinates of the meshes that have them (a triangle's face
+    /// normal and barycentric uvs stand in for what its mesh lacks), located by `attrs`,
+    /// sorted by first vertex.
+    pub(crate) normals: Vec<glam::Vec3>,
+    pub(crate) uvs: Vec<Vec2>,
+    pub(crate) attrs: Vec<MeshAttrs>,
     pub bvh: WideBvh,
     pub materials: Vec<Material>,
     pub lights: Lights,
-    /// Vertex normals and texture coordinates of triangles whose mesh has either (the
-    /// triangle's face normal, and barycentric uvs, stand in for what it lacks).
-    pub normals: Vec<[Vec3A; 3]>,
-    pub uvs: Vec<[Vec2; 3]>,
     pub textures: Vec<crate::texture::Texture>,
     pub cameras: Vec<(String, CameraDesc)>,
     pub desc_settings: desc::FileSettings,
 }
 
 impl Scene {
+    #[inline(always)]
+    fn vertex(&self, i: u32) -> Vec3A {
+        Vec3A::from(self.positions[i as usize])
+    }
+
+    #[inline(always)]
+    fn triangle(&self, [a, b, c]: [u32; 3]) -> Triangle {
+        Triangle::new(self.vertex(a), self.vertex(b), self.vertex(c))
+    }
+
+    /// Vertex `i` by one unaligned 16-byte load (its fourth lane is the next vertex's x,
+    /// which no Vec3A operation reads), for the intersection tests.
+    #[inline(always)]
+    fn vertex_fast(&self, i: u32) -> Vec3A {
+        debug_assert!((i as usize) + 1 < self.positions.len());
+        // SAFETY: `positions` ends with a padding vertex and every index in `tris` is below
+        // its last (checked by `Scene::build`, the only writer of both), so the 16 bytes from
+        // vertex i lie inside the array.
+        unsafe {
+            let p = self.positions.as_ptr().add(i as usize) as *const f32;
+            #[cfg(target_arch = "x86_64")]
+            {
+                Vec3A::from(std::arch::x86_64::_mm_loadu_ps(p))
+            }
+            #[cfg(not(target_arch = "x86_64"))]
+            {
+                Vec3A::new(*p, *p.add(1), *p.add(2))
+            }
+        }
+    }
+
+    /// Primitive `i` (BVH order) hit before `t_max`: (t, u, v) (spheres: (t, 0, 0)).
+    #[inline(always)]
+    fn hit(&self, ray: &Ray, i: usize, t_max: f32) -> Option<(f32, f32, f32)> {
+        debug_assert!(i < self.tris.len());
+        // SAFETY: the BVH's leaves name primitives below tris.len() (Scene::build).
+        let [a, b, c] = unsafe { *self.tris.get_unchecked(i) };
+        if a != SPHERE {
+            Triangle::new(
+                self.vertex_fast(a),
+                self.vertex_fast(b),
+                self.vertex_fast(c),
+            )
+            .intersect(ray, t_max)
+        } else {
+            self.spheres[b as usize]
+                .intersect(ray, t_max)
+                .map(|t| (t, 0.0, 0.0))
+        }
+    }
+
     /// Closest hit along the ray, if any.
     #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<Interaction> {
         let mut best = (usize::MAX, 0.0f32, 0.0f32, 0.0f32);
-        let prims = &self.prims;
-        let found = self
-            .bvh
-            .intersect(ray, f32::INFINITY, |i, t_max| match &prims[i].shape {
-                Shape::Triangle(tri, _) => tri.intersect(ray, t_max).map(|(t, u, v)| {
-                    best = (i, u, v, t);
-                    t
-                }),
-                Shape::Sphere(s) => s.intersect(ray, t_max).inspect(|&t| {
-                    best = (i, 0.0, 0.0, t);
-                }),
-            });
+        let found = self.bvh.intersect(ray, f32::INFINITY, |i, t_max| {
+            self.hit(ray, i, t_max).map(|(t, u, v)| {
+                best = (i, u, v, t);
+                t
+            })
+        });
         if !found {
             return None;
         }
@@ -119,87 +178,111 @@ impl Scene {
 
     #[inline]
     fn interaction(&self, ray: &Ray, i: usize, u: f32, v: f32, t_hit: f32) -> Interaction {
-        let prim = &self.prims[i];
-        match &prim.shape {
-            Shape::Triangle(tri, nidx) => {
-                let (p, p_err) = tri.point(u, v);
-                let ng = tri.normal_unnormalized().normalize();
-                let ns = if *nidx != NO_NORMALS {
-                    let [n0, n1, n2] = self.normals[*nidx as usize];
+        let idx = self.tris[i];
+        let meta = self.meta[i];
+        let material = meta & META_MATERIAL;
+        let light = if meta & META_EMITTER != 0 {
+            self.emitter_light(i)
+        } else {
+            NO_LIGHT
+        };
+        if idx[0] != SPHERE {
+            let tri = self.triangle(idx);
+            let (p, p_err) = tri.point(u, v);
+            let ng = tri.normal_unnormalized().normalize();
+            let (mut ns, mut uv) = (ng, Vec2::new(u, v));
+            if meta & META_ATTRS != 0 {
+                let m = self.mesh_attrs(idx[0]);
+                let local = idx.map(|k| (k - m.first_vertex) as usize);
+                if m.normals != u32::MAX {
+                    let ns3 = &self.normals[m.normals as usize..];
+                    let [n0, n1, n2] = local.map(|k| Vec3A::from(ns3[k]));
                     let n = (n0 * (1.0 - u - v) + n1 * u + n2 * v).normalize_or_zero();
                     // Keep the shading normal on the geometric normal's side.
-                    if n == Vec3A::ZERO {
+                    ns = if n == Vec3A::ZERO {
                         ng
                     } else if n.dot(ng) < 0.0 {
                         -n
                     } else {
                         n
-                    }
-                } else {
-                    ng
-                };
-                let uv = if *nidx != NO_NORMALS {
-                    let [t0, t1, t2] = self.uvs[*nidx as usize];
-                    t0 * (1.0 - u - v) + t1 * u + t2 * v
-                } else {
-                    Vec2::new(u, v)
-                };
-                Interaction {
-                    p,
-                    p_err,
-                    ng,
-                    ns,
-                    t: t_hit,
-                    uv,
-                    material: prim.material,
-                    light: prim.light,
+                    };
+                }
+                if m.uvs != u32::MAX {
+                    let uv3 = &self.uvs[m.uvs as usize..];
+                    let [t0, t1, t2] = local.map(|k| uv3[k]);
+                    uv = t0 * (1.0 - u - v) + t1 * u + t2 * v;
                 }
             }
-            Shape::Sphere(s) => {
-                let (p, n, p_err) = s.surface_point(ray.at(t_hit));
-                let phi = n.y.atan2(n.x);
-                let phi = if phi < 0.0 {
-                    phi + std::f32::consts::TAU
-                } else {
-                    phi
-                };
-                let uv = Vec2::new(
-                    phi / std::f32::consts::TAU,
-                    n.z.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
-                );
-                Interaction {
-                    p,
-                    p_err,
-                    ng: n,
-                    ns: n,
-                    t: t_hit,
-                    uv,
-                    material: prim.material,
-                    light: prim.light,
-                }
+            Interaction {
+                p,
+                p_err,
+                ng,
+                ns,
+                t: t_hit,
+                uv,
+                material,
+                light,
+            }
+        } else {
+            let s = &self.spheres[idx[1] as usize];
+            let (p, n, p_err) = s.surface_point(ray.at(t_hit));
+            let phi = n.y.atan2(n.x);
+            let phi = if phi < 0.0 {
+                phi + std::f32::consts::TAU
+            } else {
+                phi
+            };
+            let uv = Vec2::new(
+                phi / std::f32::consts::TAU,
+                n.z.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
+            );
+            Interaction {
+                p,
+                p_err,
+                ng: n,
+                ns: n,
+                t: t_hit,
+                uv,
+                material,
+                light,
             }
         }
+    }
+
+    /// The area light of emitting primitive `i`.
+    #[cold]
+    fn emitter_light(&self, i: usize) -> u32 {
+        let k = self.emitters.partition_point(|&(p, _)| (p as usize) < i);
+        self.emitters[k].1
+    }
+
+    /// The attributes of the mesh holding vertex `v`.
+    fn mesh_attrs(&self, v: u32) -> &MeshAttrs {
+        let k = self.attrs.partition_point(|m| m.first_vertex <= v);
+        &self.attrs[k - 1]
     }
 
     /// True if anything blocks the ray before parametric distance `t_max`.
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
-        let prims = &self.prims;
         self.bvh
-            .occluded(ray, t_max, |i, t_max| match &prims[i].shape {
-                Shape::Triangle(tri, _) => tri.intersect(ray, t_max).is_some(),
-                Shape::Sphere(s) => s.intersect(ray, t_max).is_some(),
-            })
+            .occluded(ray, t_max, |i, t_max| self.hit(ray, i, t_max).is_some())
     }
 
-    /// Bytes held by the geometry the integrators trace: primitives, BVH nodes, vertex
-    /// normals and texture coordinates (not materials, textures or lights).
+    /// Bytes held by the geometry the integrators trace: per-primitive indices and
+    /// materials, vertex positions, normals and texture coordinates, spheres, the emitter
+    /// table and BVH nodes (not materials, textures or lights).
     pub fn memory_bytes(&self) -> usize {
-        use std::mem::size_of;
-        self.prims.len() * size_of::<Primitive>()
+        use std::mem::size_of_val;
+        size_of_val(&self.tris[..])
+            + size_of_val(&self.meta[..])
+            + size_of_val(&self.positions[..])
+            + size_of_val(&self.spheres[..])
+            + size_of_val(&self.emitters[..])
+            + size_of_val(&self.normals[..])
+            + size_of_val(&self.uvs[..])
+            + size_of_val(&self.attrs[..])
             + self.bvh.memory_bytes()
-            + self.normals.len() * size_of::<[Vec3A; 3]>()
-            + self.uvs.len() * size_of::<[Vec2; 3]>()
     }
 
     /// The material at a hit, its texture (if any) evaluated there.
@@ -219,10 +302,12 @@ impl Scene {
         }
     }
 
+    /// Primitives: triangles and spheres.
+    pub fn prim_count(&self) -> usize {
+        self.tris.len()
+    }
+
     pub fn triangle_count(&self) -> usize {
-        self.prims
-            .iter()
-            .filter(|p| matches!(p.shape, Shape::Triangle(..)))
-            .count()
+        self.tris.len() - self.spheres.len()
     }
 }
