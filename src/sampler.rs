@@ -218,27 +218,13 @@ const fn hash_const(mut n: u32) -> u32 {
     n
 }
 
-/// `sobol_rev(i, d)` for d = 0, 1 by two table lookups: Sobol points are linear over GF(2) in
+/// `sobol_rev(i, d)` for d < 4 by two table lookups: Sobol points are linear over GF(2) in
 /// the index bits, so the top two bytes of the index (all that 2^16 samples use) contribute
 /// independently. The crate walks the set bits one by one, the dearest part of a sample.
 #[inline(always)]
 fn sobol_rev_fast(i: u32, d: usize) -> u32 {
-    let t = &sobol_tables()[d];
-    t[0][(i >> 24) as usize] ^ t[1][((i >> 16) & 0xff) as usize]
-}
-
-fn sobol_tables() -> &'static [[[u32; 256]; 2]; 2] {
-    static TABLES: std::sync::OnceLock<[[[u32; 256]; 2]; 2]> = std::sync::OnceLock::new();
-    TABLES.get_or_init(|| {
-        let mut t = [[[0; 256]; 2]; 2];
-        for (d, td) in t.iter_mut().enumerate() {
-            for b in 0..256u32 {
-                td[0][b as usize] = sobol_burley::parts::sobol_rev(b << 24, d as u32);
-                td[1][b as usize] = sobol_burley::parts::sobol_rev(b << 16, d as u32);
-            }
-        }
-        t
-    })
+    let t = sobol4_tables();
+    t[0][(i >> 24) as usize][d] ^ t[1][((i >> 16) & 0xff) as usize][d]
 }
 
 /// Owen-scrambles the four reversed Sobol coordinates of a request with seed `seed` (one
@@ -306,18 +292,19 @@ mod sse41 {
     }
 }
 
-/// Dimensions 0–3 of `sobol_int4_rev` by byte, as `sobol_tables` has them for 0 and 1.
+/// Sobol dimensions 0–3 (reversed) of each value of the index's top byte, `[0]`, and of its
+/// second byte, `[1]`: the index's contribution is the XOR of the two.
 fn sobol4_tables() -> &'static [[[u32; 4]; 256]; 2] {
     static TABLES: std::sync::OnceLock<[[[u32; 4]; 256]; 2]> = std::sync::OnceLock::new();
     TABLES.get_or_init(|| {
-        let mut t = [[[0; 4]; 256]; 2];
-        for b in 0..256u32 {
-            for d in 0..4 {
-                t[0][b as usize][d] = sobol_burley::parts::sobol_rev(b << 24, d as u32);
-                t[1][b as usize][d] = sobol_burley::parts::sobol_rev(b << 16, d as u32);
-            }
-        }
-        t
+        let byte = |shift: u32| {
+            std::array::from_fn(|b| {
+                std::array::from_fn(|d| {
+                    sobol_burley::parts::sobol_rev((b as u32) << shift, d as u32)
+                })
+            })
+        };
+        [byte(24), byte(16)]
     })
 }
 
@@ -370,7 +357,7 @@ mod tests {
     fn fast_sobol_matches_the_crate() {
         for i in 0..(1u32 << 16) {
             let rev = i.reverse_bits();
-            for d in 0..2 {
+            for d in 0..4 {
                 let want = sobol_burley::parts::sobol_rev(rev, d as u32);
                 assert_eq!(sobol_rev_fast(rev, d), want, "index {i}, dimension {d}");
             }
