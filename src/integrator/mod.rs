@@ -181,7 +181,7 @@ pub(crate) fn sample_lights(
 ) -> Color {
     const BATCH: u32 = 8;
     let mut sum = Color::ZERO;
-    // Left uninitialised: filling it cost 8 % of all instructions on the Cornell box.
+    // Left uninitialised: entry k is written before it is read.
     let mut pending = [const { MaybeUninit::<(Ray, f32, Color)>::uninit() }; BATCH as usize];
     let mut left = n;
     while left > 0 {

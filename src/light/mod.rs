@@ -335,3 +335,58 @@ impl Lights {
         self.lights.iter().map(|l| l.power()).sum()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tri(a: [f32; 3], b: [f32; 3], c: [f32; 3]) -> Triangle {
+        Triangle::new(a.into(), b.into(), c.into())
+    }
+
+    /// A square split along its diagonal is one parallelogram light: its area, its normal
+    /// (the triangles' own), and sampled points inside the square.
+    #[test]
+    fn quad_is_one_parallelogram_light() {
+        let (a, b) = (
+            tri([0.0, 0.0, 1.0], [2.0, 0.0, 1.0], [2.0, 3.0, 1.0]),
+            tri([0.0, 0.0, 1.0], [2.0, 3.0, 1.0], [0.0, 3.0, 1.0]),
+        );
+        let l = AreaLight::parallelogram(&a, &b, Color::ONE).expect("a parallelogram");
+        assert!((l.area - 6.0).abs() < 1e-6, "area {}", l.area);
+        for (i, j) in [
+            (0.0, 0.0),
+            (0.999, 0.0),
+            (0.5, 0.5),
+            (0.0, 0.999),
+            (0.999, 0.999),
+        ] {
+            let (p, n, _) = l.sample_point(Vec2::new(i, j));
+            assert_eq!(n, Vec3A::Z);
+            assert!((0.0..=2.0).contains(&p.x) && (0.0..=3.0).contains(&p.y) && p.z == 1.0);
+        }
+        // The corners of the unit square map to the square's four corners.
+        let corners: Vec<Vec3A> = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
+            .iter()
+            .map(|&(i, j)| l.sample_point(Vec2::new(i, j)).0)
+            .collect();
+        for c in [[0.0, 0.0], [2.0, 0.0], [2.0, 3.0], [0.0, 3.0]] {
+            assert!(corners.iter().any(|p| p.x == c[0] && p.y == c[1]), "{c:?}");
+        }
+    }
+
+    /// Pairs that are not a parallelogram, or face opposite ways, stay two triangle lights.
+    #[test]
+    fn other_pairs_are_not_parallelograms() {
+        let a = tri([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]);
+        // A kite: shares the diagonal, but the far vertex is not the fourth corner.
+        let kite = tri([0.0, 0.0, 0.0], [1.0, 1.0, 0.0], [-0.2, 1.3, 0.0]);
+        assert!(AreaLight::parallelogram(&a, &kite, Color::ONE).is_none());
+        // The square's other half, wound the other way (facing down).
+        let flipped = tri([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]);
+        assert!(AreaLight::parallelogram(&a, &flipped, Color::ONE).is_none());
+        // Sharing only one vertex.
+        let apart = tri([1.0, 1.0, 0.0], [2.0, 1.0, 0.0], [2.0, 2.0, 0.0]);
+        assert!(AreaLight::parallelogram(&a, &apart, Color::ONE).is_none());
+    }
+}
