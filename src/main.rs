@@ -395,15 +395,8 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
         catch_signals();
     }
     let t_load = Instant::now();
-    let mut defines = Vec::new();
-    for d in &a.define {
-        let Some((k, v)) = d.split_once('=') else {
-            return Err(Error::Usage(format!("-D expects NAME=VALUE, got '{d}'")));
-        };
-        defines.push((k.to_string(), v.to_string()));
-    }
     let load = mcrt::LoadOptions {
-        defines,
+        defines: parse_defines(&a.define)?,
         lenient: a.lenient,
     };
     let desc = mcrt::load_scene_with(&a.scene, &load)?;
@@ -852,20 +845,24 @@ fn render_photon(
     Ok(0)
 }
 
+/// `-D NAME=VALUE` flags as (name, value) pairs.
+fn parse_defines(flags: &[String]) -> Result<Vec<(String, String)>, Error> {
+    flags
+        .iter()
+        .map(|d| match d.split_once('=') {
+            Some((k, v)) => Ok((k.to_string(), v.to_string())),
+            None => Err(Error::Usage(format!("-D expects NAME=VALUE, got '{d}'"))),
+        })
+        .collect()
+}
+
 fn photons(a: PhotonsArgs) -> Result<(), Error> {
     check_output_path(&a.output)?;
     if a.threads == Some(0) {
         return Err(Error::Usage("--threads must be at least 1".into()));
     }
-    let mut defines = Vec::new();
-    for d in &a.define {
-        let Some((k, v)) = d.split_once('=') else {
-            return Err(Error::Usage(format!("-D expects NAME=VALUE, got '{d}'")));
-        };
-        defines.push((k.to_string(), v.to_string()));
-    }
     let load = mcrt::LoadOptions {
-        defines,
+        defines: parse_defines(&a.define)?,
         lenient: false,
     };
     let desc = mcrt::load_scene_with(&a.scene, &load)?;

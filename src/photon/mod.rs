@@ -149,17 +149,9 @@ pub fn irradiance_estimate(map: &PhotonMap, p: Vec3A, n: Vec3A, k: usize, r_max:
         } else {
             out.truncate(k);
         }
-        if out.is_empty() {
+        let Some(r2) = gather_radius2(out, k, r_max) else {
             return Color::ZERO;
-        }
-        let r2 = if out.len() == k {
-            out[out.len() - 1].d2
-        } else {
-            r_max * r_max
         };
-        if r2.is_nan() || r2 <= 0.0 {
-            return Color::ZERO;
-        }
         let r = r2.sqrt();
         let mut sum = Color::ZERO;
         for f in out.iter() {
@@ -255,17 +247,9 @@ pub fn radiance_estimate(
     SCRATCH.with(|s| {
         let (heap, out) = &mut *s.borrow_mut();
         map.k_nearest(sp.si.p, k, r_max * r_max, &keep, heap, out);
-        if out.is_empty() {
+        let Some(r2) = gather_radius2(out, k, r_max) else {
             return Color::ZERO;
-        }
-        let r2 = if out.len() == k {
-            out[out.len() - 1].d2
-        } else {
-            r_max * r_max
         };
-        if r2.is_nan() || r2 <= 0.0 {
-            return Color::ZERO;
-        }
         let r = r2.sqrt();
         let mut sum = Color::ZERO;
         for f in out.iter() {
@@ -311,4 +295,15 @@ pub fn visibility(map: &PhotonMap, sp: &ShadingPoint, k: usize, r_max: f32) -> V
             Visibility::Unknown
         }
     })
+}
+
+/// The squared radius of a k-nearest gather: the k-th photon's distance when k were found,
+/// else the search radius; None when nothing usable was found.
+fn gather_radius2(found: &[map::Found], k: usize, r_max: f32) -> Option<f32> {
+    let r2 = match found.len() {
+        0 => return None,
+        n if n == k => found[n - 1].d2,
+        _ => r_max * r_max,
+    };
+    (r2 > 0.0).then_some(r2) // false for NaN too
 }
