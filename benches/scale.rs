@@ -4,6 +4,7 @@
 //!
 //!     cargo bench --bench scale            (all four sizes; about a minute and 2 GB at 10 M)
 //!     cargo bench --bench scale -- 1000000 (sizes up to this count)
+//!     cargo bench --bench scale -- 1000000 --build-only  (no renders)
 
 #[path = "common.rs"]
 mod common;
@@ -17,11 +18,13 @@ fn main() {
         .skip(1)
         .find_map(|a| a.parse().ok())
         .unwrap_or(u64::MAX);
+    // `--build-only`: builds without rendering (for instruction counts of the build).
+    let build_only = std::env::args().any(|a| a == "--build-only");
     let base = common::bunny();
     println!(
-        "| triangles | build (s) | build (M tri/s) | bytes/triangle | samples/s (M) | vs 10 k |"
+        "| triangles | build (s) | build (M tri/s) | bytes/triangle | SAH cost | samples/s (M) | vs 10 k |"
     );
-    println!("|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|");
     let mut first_rate = None;
     for k in [2u32, 5, 16, 52] {
         let n = base.indices.len() as u64 * (k * k) as u64;
@@ -30,10 +33,24 @@ fn main() {
         }
         let mesh = common::subdivide(&base, k);
         let desc = common::bunny_scene(mesh);
+        // (The copy is the benchmark's, so that `desc` can be dropped after the build; it is
+        // not part of the build.)
+        let copy = desc.clone();
         let t = Instant::now();
-        let scene = Scene::build(desc.clone());
+        let scene = Scene::build(copy);
         let build = t.elapsed().as_secs_f64();
         let bytes = scene.memory_bytes() as f64 / scene.prim_count() as f64;
+        if build_only {
+            println!(
+                "| {} | {:.2} | {:.2} | {:.0} | {:.1} | – | – |",
+                scene.prim_count(),
+                build,
+                scene.prim_count() as f64 / build / 1e6,
+                bytes,
+                scene.bvh.sah_cost()
+            );
+            continue;
+        }
         let fs = FileSettings::default();
         let s = mcrt::resolve_settings(
             &fs,
@@ -50,11 +67,12 @@ fn main() {
         let rate = stats.samples as f64 / stats.elapsed.as_secs_f64();
         let first = *first_rate.get_or_insert(rate);
         println!(
-            "| {} | {:.2} | {:.2} | {:.0} | {:.2} | {:.2}× slower |",
+            "| {} | {:.2} | {:.2} | {:.0} | {:.1} | {:.2} | {:.2}× slower |",
             scene.prim_count(),
             build,
             scene.prim_count() as f64 / build / 1e6,
             bytes,
+            scene.bvh.sah_cost(),
             rate / 1e6,
             first / rate
         );

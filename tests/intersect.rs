@@ -873,6 +873,31 @@ fn bvh_matches_brute_force() {
     assert!(hits > 400 && hits < 3600, "{hits} hits");
 }
 
+/// Inputs of at least `bvh::CLUSTER_MIN` primitives are built over small clusters of them;
+/// that tree too must agree exactly with brute force.
+#[test]
+fn clustered_bvh_matches_brute_force() {
+    let mut rng = Rng::new(11);
+    let soup = Soup::new(&mut rng, mcrt::accel::bvh::CLUSTER_MIN as u32 + 500, 30);
+    let rays: Vec<Ray> = (0..1500)
+        .map(|i| {
+            let o = if i % 2 == 0 {
+                rng.ball() * 12.0
+            } else {
+                rng.dir() * 30.0
+            };
+            let d = if i % 2 == 0 {
+                rng.dir()
+            } else {
+                (rng.ball() * 8.0 - o).normalize()
+            };
+            Ray::new(o, d)
+        })
+        .collect();
+    let hits = check_rays(&soup, rays.into_iter(), &mut rng);
+    assert!(hits > 150 && hits < 1350, "{hits} hits");
+}
+
 /// Directions with a component of −0.0 (as `-Vec3A::Y` has, or any negated zero) are
 /// directions like any other: the ray is parallel to that slab, and its reciprocal is −∞.
 /// The traversal must treat the slab by the sign of the reciprocal (pbrt-v4's

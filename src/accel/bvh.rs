@@ -8,11 +8,16 @@
 //! (a subtree over n primitives takes at most 2n − 1 slots: the left child follows its parent
 //! and the right child starts 2·n_left slots after it), so subtrees built in parallel write
 //! straight into their own parts of it. Large nodes choose their split from a fixed sample of
-//! their primitives; the result depends only on the input, never on the thread count.
+//! their primitives; small ones find the exact SAH split over lists sorted once per axis.
+//! Inputs of [`CLUSTER_MIN`] primitives or more are built over pairs of neighbours
+//! ([`cluster`]). The result depends only on the input, never on the thread count.
 
 use crate::geometry::Aabb;
 use glam::{Vec3A, Vec4};
 use std::mem::MaybeUninit;
+
+mod cluster;
+pub use cluster::CLUSTER_MIN;
 
 /// A primitive's bounds, with its index in the spare lane of the lower corner (32 bytes).
 #[derive(Clone, Copy, Debug)]
@@ -93,6 +98,10 @@ pub struct Bvh {
     nodes: Vec<MaybeUninit<BvhNode>>,
     /// `order[i]` is the caller's index of the BVH's i-th primitive.
     pub order: Vec<u32>,
+    /// For a tree built over clusters ([`CLUSTER_MIN`]): nodes count clusters, and the
+    /// `j`-th cluster's primitives are `order[prim_start[j]..prim_start[j + 1]]`. Empty
+    /// when nodes count primitives.
+    prim_start: Vec<u32>,
 }
 
 impl Bvh {
@@ -109,6 +118,17 @@ impl Bvh {
     }
     pub fn is_empty(&self) -> bool {
         self.order.is_empty()
+    }
+    /// The primitives under node `n` (which must be a node of this tree): the position of
+    /// the first in `order`, and their count.
+    #[inline]
+    pub fn prim_range(&self, n: &BvhNode) -> (u32, u32) {
+        if self.prim_start.is_empty() {
+            (n.first, n.prims())
+        } else {
+            let (a, b) = (n.first as usize, (n.first + n.prims()) as usize);
+            (self.prim_start[a], self.prim_start[b] - self.prim_start[a])
+        }
     }
 }
 
@@ -129,22 +149,33 @@ const TRAVERSAL_COST: f32 = 0.5;
 const PARALLEL_MIN: usize = 1 << 14;
 /// Nodes with more primitives than this choose their split from about `SAMPLES` of them, a
 /// fixed stride apart.
-const SAMPLE_MIN: usize = 1 << 16;
-const SAMPLES: usize = 1 << 13;
+const SAMPLE_MIN: usize = 1 << 11;
+const SAMPLES: usize = 1 << 10;
 
-/// Builds the binary tree over `refs`, which it reorders.
+/// Builds the binary tree over `refs`, which it may reorder: over the primitives
+/// themselves, or over clusters of them when there are at least [`CLUSTER_MIN`].
 pub fn build(refs: &mut [PrimRef]) -> Bvh {
+    if refs.len() >= CLUSTER_MIN {
+        cluster::build(refs)
+    } else {
+        build_sah::<MAX_LEAF>(refs)
+    }
+}
+
+/// The binary SAH tree over `refs` (reordered), with leaves of at most `L` of them.
+fn build_sah<const L: usize>(refs: &mut [PrimRef]) -> Bvh {
     let n = refs.len();
     let mut nodes: Vec<MaybeUninit<BvhNode>> = Vec::with_capacity((2 * n).max(1));
     // SAFETY: MaybeUninit needs no initialisation.
     unsafe { nodes.set_len((2 * n).max(1)) };
     if n > 0 {
         let (b, cb) = bounds_of(refs);
-        build_node(&mut nodes, refs, 0, 0, b, cb);
+        build_node::<L>(&mut nodes, refs, 0, 0, b, cb);
     }
     Bvh {
         nodes,
         order: refs.iter().map(|r| r.index()).collect(),
+        prim_start: Vec::new(),
     }
 }
 
@@ -194,7 +225,7 @@ fn bin3(v: Vec3A, last: f32) -> [usize; 3] {
 /// Writes the subtree over `refs` (the primitives `first..first + refs.len()` of the final
 /// order) into `nodes`, its root at `nodes[0]`. `bounds` and `cbounds` are the bounds of the
 /// primitives and of their doubled centroids.
-fn build_node(
+fn build_node<const L: usize>(
     nodes: &mut [MaybeUninit<BvhNode>],
     refs: &mut [PrimRef],
     first: usize,
@@ -209,7 +240,7 @@ fn build_node(
     }
     let cext = cbounds.extent();
     if depth >= MAX_DEPTH - 32 || cext.max_element() <= 0.0 {
-        if n <= MAX_LEAF {
+        if n <= L {
             nodes[0].write(leaf(&bounds, first, n));
             return;
         }
@@ -221,10 +252,10 @@ fn build_node(
         let (l, r) = refs.split_at(mid);
         let (lb, lc) = bounds_of(l);
         let (rb, rc) = bounds_of(r);
-        return interior(nodes, refs, first, depth, &bounds, mid, (lb, lc), (rb, rc));
+        return interior::<L>(nodes, refs, first, depth, &bounds, mid, (lb, lc), (rb, rc));
     }
     if n <= SWEEP_MAX {
-        return sweep_node(nodes, refs, first, depth, &bounds);
+        return sweep_node::<L>(nodes, refs, first, &bounds);
     }
     // Bin the centroids along all three axes in one pass (over a sample of a large node);
     // fewer bins for fewer primitives.
@@ -269,7 +300,7 @@ fn build_node(
             acc.grow(&b0[i]);
             acc.grow(&b1[i]);
             cnt += c0[i] + c1[i];
-            right_area[i] = acc.surface_area();
+            right_area[i] = half_area(acc.min, acc.max);
             right_count[i] = cnt;
         }
         let mut acc = Aabb::EMPTY;
@@ -281,28 +312,28 @@ fn build_node(
             if cnt == 0 || right_count[i + 1] == 0 {
                 continue;
             }
-            let cost =
-                cnt as f32 * acc.surface_area() + right_count[i + 1] as f32 * right_area[i + 1];
+            let cost = cnt as f32 * half_area(acc.min, acc.max)
+                + right_count[i + 1] as f32 * right_area[i + 1];
             if best.is_none_or(|(_, _, c)| cost < c) {
                 best = Some((axis, i, cost));
             }
         }
     }
-    let area = bounds.surface_area().max(f32::MIN_POSITIVE);
+    let area = half_area(bounds.min, bounds.max).max(f32::MIN_POSITIVE);
     let sampled = samples as f32 / n as f32;
     match best {
-        Some((axis, bin, cost)) if split_pays(n, area, cost / sampled) => {
+        Some((axis, bin, cost)) if split_pays::<L>(n, area, cost / sampled) => {
             let (mid, l, r) = partition(refs, |c| bin3((c - cmin) * scale, last)[axis] <= bin);
             if mid == 0 || mid == n {
                 // Cannot happen (the sampled bins held primitives on both sides); kept so
                 // that the node layout can never underflow.
-                return interior_median(nodes, refs, first, depth, &bounds);
+                return interior_median::<L>(nodes, refs, first, depth, &bounds);
             }
-            interior(nodes, refs, first, depth, &bounds, mid, l, r)
+            interior::<L>(nodes, refs, first, depth, &bounds, mid, l, r)
         }
         // (Without a split every centroid lies in one bin along every axis; rare but
         // possible with centroids a few ulps apart.)
-        None if n > MAX_LEAF => interior_median(nodes, refs, first, depth, &bounds),
+        None if n > L => interior_median::<L>(nodes, refs, first, depth, &bounds),
         _ => {
             nodes[0].write(leaf(&bounds, first, n));
         }
@@ -313,94 +344,177 @@ fn build_node(
 /// (count times area) is `children`, beats a leaf by the SAH, or the node is too large for
 /// a leaf.
 #[inline]
-fn split_pays(n: usize, area: f32, children: f32) -> bool {
-    n > MAX_LEAF || TRAVERSAL_COST + children / area < n as f32
+fn split_pays<const L: usize>(n: usize, area: f32, children: f32) -> bool {
+    n > L || TRAVERSAL_COST + children / area < n as f32
 }
 
 /// Nodes of at most this many primitives find the exact SAH split (the primitives sorted
 /// along each axis) instead of binning, whose fixed cost dominates at this size.
 const SWEEP_MAX: usize = 12;
 
-/// The exact SAH split of a small node over all three axes.
-fn sweep_node(
+/// Half the surface area of the box `lo..hi` (non-empty); the factor ½ changes no decision.
+#[inline(always)]
+fn half_area(lo: Vec3A, hi: Vec3A) -> f32 {
+    let e = hi - lo;
+    (e * Vec3A::new(e.y, e.z, e.x)).element_sum()
+}
+
+/// The primitives of a small node, copied out once: bounds, and the order of their doubled
+/// centroids along each axis.
+struct Small {
+    lo: [Vec3A; SWEEP_MAX],
+    hi: [Vec3A; SWEEP_MAX],
+}
+
+/// The whole subtree of a small node by exact SAH sweeps (Wald, "On fast Construction of
+/// SAH-based Bounding Volume Hierarchies", 2007, §3: the full sweep over presorted lists).
+/// The primitives are sorted along each axis once; children take their parent's sorted
+/// lists filtered (stable), so no level sorts again.
+fn sweep_node<const L: usize>(
     nodes: &mut [MaybeUninit<BvhNode>],
     refs: &mut [PrimRef],
     first: usize,
-    depth: usize,
     bounds: &Aabb,
 ) {
     let n = refs.len();
-    let mut order = [[0u8; SWEEP_MAX]; 3];
-    let mut right_area = [0f32; SWEEP_MAX];
-    let mut best = (0, 0, f32::INFINITY); // (axis, left count, cost)
-    if n == 2 {
-        // One split only, whatever the axis.
-        let area = |r: &PrimRef| {
-            Aabb {
-                min: r.lo(),
-                max: r.hi(),
+    let mut s = Small {
+        lo: [Vec3A::ZERO; SWEEP_MAX],
+        hi: [Vec3A::ZERO; SWEEP_MAX],
+    };
+    for (i, r) in refs.iter().enumerate() {
+        s.lo[i] = r.lo();
+        s.hi[i] = r.hi();
+    }
+    let mut ord = [[0u8; SWEEP_MAX]; 3];
+    for (axis, o) in ord.iter_mut().enumerate() {
+        // Insertion sort by centroid, stable (ties keep their order: deterministic).
+        let mut key = [0f32; SWEEP_MAX];
+        for i in 0..n {
+            let c = s.lo[i][axis] + s.hi[i][axis];
+            let mut j = i;
+            while j > 0 && key[j - 1] > c {
+                key[j] = key[j - 1];
+                o[j] = o[j - 1];
+                j -= 1;
             }
-            .surface_area()
+            key[j] = c;
+            o[j] = i as u8;
+        }
+    }
+    let mut out = [0u8; SWEEP_MAX];
+    let mut out_len = 0;
+    small_node::<L>(
+        nodes,
+        &s,
+        &ord,
+        n,
+        first,
+        bounds.min,
+        bounds.max,
+        &mut out,
+        &mut out_len,
+    );
+    let mut tmp = [refs[0]; SWEEP_MAX];
+    tmp[..n].copy_from_slice(refs);
+    for (r, &o) in refs.iter_mut().zip(&out[..n]) {
+        *r = tmp[o as usize];
+    }
+}
+
+/// One node of [`sweep_node`]'s subtree: `ord[axis][..n]` are its primitives sorted along
+/// each axis. Leaves append their primitives to `out`, in the order the tree lists them.
+#[allow(clippy::too_many_arguments)]
+fn small_node<const L: usize>(
+    nodes: &mut [MaybeUninit<BvhNode>],
+    s: &Small,
+    ord: &[[u8; SWEEP_MAX]; 3],
+    n: usize,
+    first: usize,
+    lo: Vec3A,
+    hi: Vec3A,
+    out: &mut [u8; SWEEP_MAX],
+    out_len: &mut usize,
+) {
+    let emit_leaf =
+        |nodes: &mut [MaybeUninit<BvhNode>], out: &mut [u8; SWEEP_MAX], out_len: &mut usize| {
+            nodes[0].write(leaf(&Aabb { min: lo, max: hi }, first, n));
+            out[*out_len..*out_len + n].copy_from_slice(&ord[0][..n]);
+            *out_len += n;
         };
-        order[0][1] = 1;
-        best = (0, 1, area(&refs[0]) + area(&refs[1]));
-    } else {
-        for (axis, ord) in order.iter_mut().enumerate() {
-            // Insertion sort by centroid, stable (ties keep their order: deterministic).
-            let mut key = [0f32; SWEEP_MAX];
-            for (i, r) in refs.iter().enumerate() {
-                let c = r.c2()[axis];
-                let mut j = i;
-                while j > 0 && key[j - 1] > c {
-                    key[j] = key[j - 1];
-                    ord[j] = ord[j - 1];
-                    j -= 1;
-                }
-                key[j] = c;
-                ord[j] = i as u8;
+    if n == 1 {
+        return emit_leaf(nodes, out, out_len);
+    }
+    // The cheapest split over all three axes: (axis, left count, cost).
+    let mut best = (0, n / 2, f32::INFINITY);
+    let mut right_area = [0f32; SWEEP_MAX];
+    for (axis, o) in ord.iter().enumerate() {
+        let (mut alo, mut ahi) = (s.lo[o[n - 1] as usize], s.hi[o[n - 1] as usize]);
+        right_area[n - 1] = half_area(alo, ahi);
+        for k in (1..n - 1).rev() {
+            alo = alo.min(s.lo[o[k] as usize]);
+            ahi = ahi.max(s.hi[o[k] as usize]);
+            right_area[k] = half_area(alo, ahi);
+        }
+        let (mut alo, mut ahi) = (s.lo[o[0] as usize], s.hi[o[0] as usize]);
+        for k in 1..n {
+            if k > 1 {
+                alo = alo.min(s.lo[o[k - 1] as usize]);
+                ahi = ahi.max(s.hi[o[k - 1] as usize]);
             }
-            let mut acc = Aabb::EMPTY;
-            for k in (1..n).rev() {
-                let r = &refs[ord[k] as usize];
-                acc.min = acc.min.min(r.lo());
-                acc.max = acc.max.max(r.hi());
-                right_area[k] = acc.surface_area();
-            }
-            let mut acc = Aabb::EMPTY;
-            for k in 1..n {
-                let r = &refs[ord[k - 1] as usize];
-                acc.min = acc.min.min(r.lo());
-                acc.max = acc.max.max(r.hi());
-                let cost = k as f32 * acc.surface_area() + (n - k) as f32 * right_area[k];
-                if cost < best.2 {
-                    best = (axis, k, cost);
-                }
+            let cost = k as f32 * half_area(alo, ahi) + (n - k) as f32 * right_area[k];
+            if cost < best.2 {
+                best = (axis, k, cost);
             }
         }
     }
     let (axis, mid, cost) = best;
-    let area = bounds.surface_area().max(f32::MIN_POSITIVE);
-    if mid == 0 || !split_pays(n, area, cost) {
-        if n <= MAX_LEAF {
-            nodes[0].write(leaf(bounds, first, n));
-            return;
+    let area = half_area(lo, hi).max(f32::MIN_POSITIVE);
+    // (A cost that is not finite, from non-finite bounds, splits in the middle.)
+    if n <= L && !split_pays::<L>(n, area, cost) {
+        return emit_leaf(nodes, out, out_len);
+    }
+    // Children's sorted lists: each axis's list filtered by side, order kept.
+    let mut left = [false; SWEEP_MAX];
+    for &i in &ord[axis][..mid] {
+        left[i as usize] = true;
+    }
+    let mut lord = [[0u8; SWEEP_MAX]; 3];
+    let mut rord = [[0u8; SWEEP_MAX]; 3];
+    for a in 0..3 {
+        let (mut l, mut r) = (0, 0);
+        for &i in &ord[a][..n] {
+            if left[i as usize] {
+                lord[a][l] = i;
+                l += 1;
+            } else {
+                rord[a][r] = i;
+                r += 1;
+            }
         }
-        // (Only with non-finite bounds.)
-        return interior_median(nodes, refs, first, depth, bounds);
     }
-    let mut tmp = [refs[0]; SWEEP_MAX];
-    tmp[..n].copy_from_slice(refs);
-    for (r, &o) in refs.iter_mut().zip(&order[axis][..n]) {
-        *r = tmp[o as usize];
-    }
-    let (l, r) = refs.split_at(mid);
-    let (lb, lc) = bounds_of(l);
-    let (rb, rc) = bounds_of(r);
-    interior(nodes, refs, first, depth, bounds, mid, (lb, lc), (rb, rc))
+    let bounds_of = |o: &[u8]| {
+        let (mut a, mut b) = (s.lo[o[0] as usize], s.hi[o[0] as usize]);
+        for &i in &o[1..] {
+            a = a.min(s.lo[i as usize]);
+            b = b.max(s.hi[i as usize]);
+        }
+        (a, b)
+    };
+    let (llo, lhi) = bounds_of(&lord[0][..mid]);
+    let (rlo, rhi) = bounds_of(&rord[0][..n - mid]);
+    nodes[0].write(BvhNode {
+        min: lo.to_array(),
+        first: first as u32,
+        max: hi.to_array(),
+        count: n as u32,
+    });
+    let (ln, rn) = nodes[1..].split_at_mut(2 * mid - 1);
+    small_node::<L>(ln, s, &lord, mid, first, llo, lhi, out, out_len);
+    small_node::<L>(rn, s, &rord, n - mid, first + mid, rlo, rhi, out, out_len);
 }
 
 /// An inner node split in the middle of `refs` as they lie.
-fn interior_median(
+fn interior_median<const L: usize>(
     nodes: &mut [MaybeUninit<BvhNode>],
     refs: &mut [PrimRef],
     first: usize,
@@ -411,7 +525,7 @@ fn interior_median(
     let (l, r) = refs.split_at(mid);
     let (lb, lc) = bounds_of(l);
     let (rb, rc) = bounds_of(r);
-    interior(nodes, refs, first, depth, bounds, mid, (lb, lc), (rb, rc))
+    interior::<L>(nodes, refs, first, depth, bounds, mid, (lb, lc), (rb, rc))
 }
 
 fn widest_axis(e: Vec3A) -> usize {
@@ -427,7 +541,7 @@ fn widest_axis(e: Vec3A) -> usize {
 /// Writes an inner node over `refs`, split at `mid`, and builds its children (in parallel
 /// when both are large).
 #[allow(clippy::too_many_arguments)]
-fn interior(
+fn interior<const L: usize>(
     nodes: &mut [MaybeUninit<BvhNode>],
     refs: &mut [PrimRef],
     first: usize,
@@ -447,12 +561,12 @@ fn interior(
     let (ln, rn) = nodes[1..].split_at_mut(2 * mid - 1);
     if left.len().min(right.len()) >= PARALLEL_MIN {
         rayon::join(
-            || build_node(ln, left, first, depth + 1, lb, lc),
-            || build_node(rn, right, first + mid, depth + 1, rb, rc),
+            || build_node::<L>(ln, left, first, depth + 1, lb, lc),
+            || build_node::<L>(rn, right, first + mid, depth + 1, rb, rc),
         );
     } else {
-        build_node(ln, left, first, depth + 1, lb, lc);
-        build_node(rn, right, first + mid, depth + 1, rb, rc);
+        build_node::<L>(ln, left, first, depth + 1, lb, lc);
+        build_node::<L>(rn, right, first + mid, depth + 1, rb, rc);
     }
 }
 

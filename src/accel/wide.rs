@@ -55,16 +55,21 @@ const MERGE_MIN_PRIMS: usize = 4096;
 const MERGE_MAX: u32 = 4;
 const MERGE_AREA: f32 = 12.0;
 
-/// Subtrees over more primitives than this are collapsed in parallel.
+/// Subtrees over more primitives than this, and than a sixteenth of the tree, are collapsed
+/// in parallel. (Each level of parallel collapse copies its subtrees' nodes into the parent's
+/// array once more, so only the top few levels are worth it.)
 const PARALLEL_MIN: u32 = 1 << 15;
+const PARALLEL_SHARE: u32 = 16;
 
 /// What the collapse needs besides the binary tree.
 struct Collapse<'a> {
     b: &'a Bvh,
-    /// Whether the primitive of this index (the caller's) is costly to test (a sphere).
+    /// Whether the primitive at this position of the BVH's order is costly to test (a sphere).
     costly: &'a (dyn Fn(u32) -> bool + Sync),
     /// Fringe subtrees whose surface area times this is below 1 become leaves (0: none).
     merge_weight: f32,
+    /// Subtrees over more primitives than this are collapsed in parallel.
+    parallel_min: u32,
 }
 
 impl WideBvh {
@@ -89,9 +94,11 @@ impl WideBvh {
             } else {
                 n as f32 / (MERGE_AREA * root.bounds().surface_area())
             },
+            parallel_min: PARALLEL_MIN.max(root.prims() / PARALLEL_SHARE),
         };
         if root.is_leaf() {
-            w.root = leaf_ref(root.first, root.prims());
+            let (first, count) = b.prim_range(root);
+            w.root = leaf_ref(first, count);
         } else {
             w.nodes = c.subtree(0);
             w.root = 0;
@@ -115,6 +122,36 @@ impl WideBvh {
 
     pub fn bounds(&self) -> Option<Aabb> {
         self.bounds
+    }
+
+    /// The tree's expected cost for a ray that meets its root, by the surface area heuristic
+    /// (MacDonald and Booth 1990): the surface area of each wide node (one four-box test)
+    /// and of each leaf times its primitives, over the root's. A measure of tree quality
+    /// that does not depend on timing; the `scale` benchmark prints it.
+    pub fn sah_cost(&self) -> f64 {
+        let Some(root) = self.bounds else { return 0.0 };
+        let area = |b: &Aabb| b.surface_area() as f64;
+        let mut cost = 0.0;
+        let mut stack = vec![(self.root, area(&root))];
+        while let Some((c, a)) = stack.pop() {
+            if c == EMPTY {
+                continue;
+            }
+            if c & LEAF != 0 {
+                cost += a * (c & 15) as f64;
+                continue;
+            }
+            cost += a;
+            let n = self.node(c);
+            for slot in 0..4 {
+                let b = Aabb {
+                    min: glam::Vec3A::new(n.bounds[0][slot], n.bounds[2][slot], n.bounds[4][slot]),
+                    max: glam::Vec3A::new(n.bounds[1][slot], n.bounds[3][slot], n.bounds[5][slot]),
+                };
+                stack.push((n.child[slot], area(&b)));
+            }
+        }
+        cost / area(&root)
     }
 
     /// Closest hit. `hit(prim, t_max)` tests the primitive `prim` (in the BVH's order) and
@@ -235,17 +272,14 @@ impl Collapse<'_> {
     fn fringe(&self, k: usize) -> bool {
         let b = self.b;
         let n = b.node(k);
+        let (first, count) = b.prim_range(n);
         if self.merge_weight == 0.0
-            || n.prims() > MERGE_MAX
+            || count > MERGE_MAX
             || n.bounds().surface_area() * self.merge_weight >= 1.0
         {
             return false;
         }
-        let first = n.first as usize;
-        if b.order[first..first + n.prims() as usize]
-            .iter()
-            .any(|&p| (self.costly)(p))
-        {
+        if (first..first + count).any(|p| (self.costly)(p)) {
             return false;
         }
         let (l, r) = (b.node(k + 1), b.node(b.right(k)));
@@ -309,12 +343,13 @@ impl Collapse<'_> {
                 node.bounds[2 * axis + 1][slot] = kn.max[axis];
             }
             if area < 0.0 {
-                node.child[slot] = leaf_ref(kn.first, kn.prims());
+                let (first, count) = b.prim_range(kn);
+                node.child[slot] = leaf_ref(first, count);
             }
         }
         out.push(node);
         let inner = |&(_, area): &(usize, f32)| area >= 0.0;
-        if b.node(i).prims() > PARALLEL_MIN {
+        if b.node(i).prims() > self.parallel_min {
             // The inner children's subtrees on their own, then appended in slot order.
             use rayon::prelude::*;
             let subs: Vec<(usize, Vec<Node4>)> = kids[..len]

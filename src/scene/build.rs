@@ -13,7 +13,7 @@ use glam::Vec3A;
 use rayon::prelude::*;
 
 impl Scene {
-    pub fn build(desc: SceneDesc) -> Scene {
+    pub fn build(mut desc: SceneDesc) -> Scene {
         // Primitives in the description's order: vertex indices (or a sphere), material and
         // flags, and bounds.
         let mut tris: Vec<[u32; 3]> = Vec::new();
@@ -26,14 +26,15 @@ impl Scene {
         let mut lights = Vec::new();
         // (primitive, light) of the emitting primitives, by primitive.
         let mut emitting: Vec<(u32, u32)> = Vec::new();
-        for shape in &desc.shapes {
+        // (Shapes are taken by value: the first mesh's arrays become the scene's, uncopied.)
+        for shape in std::mem::take(&mut desc.shapes) {
             let emission = shape.emission.filter(|e| e.max_element() > 0.0);
             assert!(shape.material <= META_MATERIAL, "too many materials");
             let mut m = shape.material;
             if emission.is_some() {
                 m |= META_EMITTER;
             }
-            match &shape.geometry {
+            match shape.geometry {
                 GeometryDesc::Mesh(mesh) => {
                     let base = positions.len() as u32;
                     assert!(
@@ -54,7 +55,6 @@ impl Scene {
                             }),
                         });
                     }
-                    positions.extend_from_slice(&mesh.positions);
                     let vertex = |i: u32| Vec3A::from(mesh.positions[i as usize]);
                     // Degenerate triangles can never be hit and cannot emit; drop them.
                     let kept: Vec<[u32; 3]> = mesh
@@ -80,12 +80,21 @@ impl Scene {
                         }
                     }
                     meta.resize(meta.len() + kept.len(), m);
-                    tris.extend_from_slice(&kept);
+                    if tris.is_empty() {
+                        tris = kept;
+                    } else {
+                        tris.extend_from_slice(&kept);
+                    }
+                    if positions.is_empty() {
+                        positions = mesh.positions;
+                    } else {
+                        positions.extend_from_slice(&mesh.positions);
+                    }
                 }
                 GeometryDesc::Sphere { center, radius } => {
                     let s = Sphere {
-                        center: (*center).into(),
-                        radius: *radius,
+                        center: center.into(),
+                        radius,
                     };
                     if let Some(e) = emission {
                         lights.push(AreaLight::new(LightShape::Sphere(s), e));
@@ -148,18 +157,17 @@ impl Scene {
                 LightDesc::Constant { radiance } => OtherLight::Constant { radiance },
             })
             .collect();
-        drop(desc.shapes);
         // The padding vertex that `Scene::vertex_fast` may read past the last one.
         positions.push(glam::Vec3::ZERO);
         let bvh = bvh::build(&mut refs);
         drop(refs);
-        let wide = WideBvh::from_binary(&bvh, &|i| tris[i as usize][0] == SPHERE);
         let order = &bvh.order;
         let tris: Vec<[u32; 3]> = order
             .par_iter()
             .with_min_len(1 << 12)
             .map(|&i| tris[i as usize])
             .collect();
+        let wide = WideBvh::from_binary(&bvh, &|p| tris[p as usize][0] == SPHERE);
         let meta: Vec<u32> = order
             .par_iter()
             .with_min_len(1 << 12)
