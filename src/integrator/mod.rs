@@ -14,6 +14,7 @@ pub mod path;
 pub mod photon;
 pub mod sppm;
 
+use crate::accel::{ShadowPacket, PACKET};
 use crate::geometry::{Frame, Ray};
 use crate::material::sampling::power_heuristic;
 use crate::material::Material;
@@ -214,11 +215,30 @@ pub(crate) fn sample_lights(
             k += 1;
         }
         stats.shadow_rays += k as u64;
-        for p in &pending[..k] {
-            // SAFETY: the first k entries were written above.
-            let (ray, t_max, contribution) = unsafe { p.assume_init_ref() };
-            if !scene.occluded(ray, *t_max) {
-                sum += *contribution;
+        // SAFETY: the first k entries were written above.
+        let pending = unsafe { &*(&pending[..k] as *const _ as *const [(Ray, f32, Color)]) };
+        let o = pending.first().map(|p| p.0.o);
+        if k > 1 && pending.iter().all(|p| Some(p.0.o) == o) {
+            let mut pk = ShadowPacket {
+                o: o.unwrap_or_default(),
+                d: [[0.0; PACKET]; 3],
+                t_max: [0.0; PACKET],
+            };
+            for (lane, (ray, t_max, _)) in pending.iter().enumerate() {
+                (pk.d[0][lane], pk.d[1][lane], pk.d[2][lane]) = (ray.d.x, ray.d.y, ray.d.z);
+                pk.t_max[lane] = *t_max;
+            }
+            let occ = scene.occluded_packet(&pk, (1 << k) - 1);
+            for (lane, (_, _, contribution)) in pending.iter().enumerate() {
+                if occ & (1 << lane) == 0 {
+                    sum += *contribution;
+                }
+            }
+        } else {
+            for (ray, t_max, contribution) in pending {
+                if !scene.occluded(ray, *t_max) {
+                    sum += *contribution;
+                }
             }
         }
     }

@@ -16,7 +16,7 @@ pub mod xml;
 pub use desc::{GeometryDesc, SceneDesc, ShapeDesc};
 pub use error::SceneError;
 
-use crate::accel::WideBvh;
+use crate::accel::{ShadowPacket, WideBvh};
 use crate::camera::CameraDesc;
 use crate::geometry::ray::{offset_ray_origin, SHADOW_EPSILON};
 use crate::geometry::{Ray, Sphere, Triangle};
@@ -267,6 +267,15 @@ impl Scene {
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
         self.bvh
             .occluded(ray, t_max, |i, t_max| self.hit(ray, i, t_max).is_some())
+    }
+
+    /// The lanes of `active` whose rays are blocked before their `t_max`: the answers of
+    /// [`Scene::occluded`] for each, in one traversal.
+    #[inline]
+    pub fn occluded_packet(&self, pk: &ShadowPacket, active: u32) -> u32 {
+        self.bvh.occluded_packet(pk, active, |i, lane| {
+            self.hit(&pk.ray(lane), i, pk.t_max[lane]).is_some()
+        })
     }
 
     /// Bytes held by the geometry the integrators trace: per-primitive indices and
