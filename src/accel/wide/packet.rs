@@ -155,8 +155,7 @@ mod avx {
                 }
                 let mut next = EMPTY;
                 let mut next_mask = 0;
-                for c in 0..4 {
-                    let child = node.child[c];
+                for (c, &child) in node.child.iter().enumerate() {
                     if child == EMPTY {
                         continue;
                     }
