@@ -926,8 +926,17 @@ fn shadow_packets_match_single_rays() {
             d: [[0.0; PACKET]; 3],
             t_max: [0.0; PACKET],
         };
+        // Some packets aim at points on one triangle's edges (the lanes `Triangle::occludes4`
+        // leaves to the f64 test), beyond the triangle so that it is the blocker.
+        let tri = soup.tris[(rng.f() * soup.tris.len() as f32) as usize % soup.tris.len()];
         for lane in 0..PACKET {
-            let mut d = (c + rng.ball() * r - o).to_array();
+            let target = if i % 5 == 1 {
+                let (a, b) = [(tri.p0, tri.p1), (tri.p1, tri.p2), (tri.p2, tri.p0)][lane % 3];
+                o + (a + (b - a) * rng.f() - o) * 1.5
+            } else {
+                c + rng.ball() * r
+            };
+            let mut d = (target - o).to_array();
             match (i + lane) % 11 {
                 0 => d[lane % 3] = 0.0,
                 1 => d[lane % 3] = -0.0,

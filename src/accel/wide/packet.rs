@@ -47,9 +47,10 @@ impl ShadowPacket {
 
 impl WideBvh {
     /// The lanes of `active` (bit i: lane i) whose rays hit something before their `t_max`.
-    /// `hit(prim, lane)` tests primitive `prim` against lane `lane`'s ray and its `t_max`.
+    /// `hit(prim, lanes)` tests primitive `prim` against the rays of `lanes` and returns
+    /// those it blocks; each lane's answer must be that of the lane's ray on its own.
     #[inline]
-    pub fn occluded_packet<F: FnMut(usize, usize) -> bool>(
+    pub fn occluded_packet<F: FnMut(usize, u32) -> u32>(
         &self,
         pk: &ShadowPacket,
         active: u32,
@@ -69,7 +70,7 @@ impl WideBvh {
 
     /// The same answers, each ray by the single-ray traversal: the fallback without AVX, and
     /// what the tests compare the packet traversal with.
-    pub fn occluded_each<F: FnMut(usize, usize) -> bool>(
+    pub fn occluded_each<F: FnMut(usize, u32) -> u32>(
         &self,
         pk: &ShadowPacket,
         active: u32,
@@ -80,7 +81,7 @@ impl WideBvh {
         while m != 0 {
             let lane = m.trailing_zeros() as usize;
             m &= m - 1;
-            if self.occluded(&pk.ray(lane), pk.t_max[lane], |p, _| hit(p, lane)) {
+            if self.occluded(&pk.ray(lane), pk.t_max[lane], |p, _| hit(p, 1 << lane) != 0) {
                 occ |= 1 << lane;
             }
         }
@@ -97,7 +98,7 @@ mod avx {
     /// The packet traversal; see the module's comment for why its answers are the
     /// single-ray traversal's.
     #[target_feature(enable = "avx")]
-    pub(super) unsafe fn occluded<F: FnMut(usize, usize) -> bool>(
+    pub(super) unsafe fn occluded<F: FnMut(usize, u32) -> u32>(
         bvh: &WideBvh,
         pk: &ShadowPacket,
         active: u32,
@@ -129,14 +130,7 @@ mod avx {
             if cur & LEAF != 0 {
                 let first = ((cur & !LEAF) >> 4) as usize;
                 for p in first..first + (cur & 15) as usize {
-                    let mut m = mask;
-                    while m != 0 {
-                        let lane = m.trailing_zeros() as usize;
-                        m &= m - 1;
-                        if hit(p, lane) {
-                            occ |= 1 << lane;
-                        }
-                    }
+                    occ |= hit(p, mask);
                     mask &= !occ;
                     if mask == 0 {
                         break;
