@@ -95,6 +95,15 @@ mod avx {
     use std::arch::x86_64::*;
     use std::mem::MaybeUninit;
 
+    /// What every box test of a packet needs, in registers.
+    struct Lanes {
+        /// 1/d as `Vec3A::recip` computes it (a division, not an approximation).
+        inv: [__m256; 3],
+        t_max: __m256,
+        /// The origin, splatted for the four children of a node.
+        o: [__m128; 3],
+    }
+
     /// The packet traversal; see the module's comment for why its answers are the
     /// single-ray traversal's.
     #[target_feature(enable = "avx")]
@@ -106,21 +115,33 @@ mod avx {
     ) -> u32 {
         let load = |a: &[f32; PACKET]| _mm256_loadu_ps(a.as_ptr());
         let one = _mm256_set1_ps(1.0);
-        // 1/d as `Vec3A::recip` computes it (a division, not an approximation).
-        let inv = [
-            _mm256_div_ps(one, load(&pk.d[0])),
-            _mm256_div_ps(one, load(&pk.d[1])),
-            _mm256_div_ps(one, load(&pk.d[2])),
-        ];
-        let t_max = load(&pk.t_max);
+        let lanes = Lanes {
+            inv: pk.d.map(|d| _mm256_div_ps(one, load(&d))),
+            t_max: load(&pk.t_max),
+            o: [pk.o.x, pk.o.y, pk.o.z].map(|x| _mm_set1_ps(x)),
+        };
+        match Coherent::new(&lanes, active) {
+            Some(c) => traverse::<true, F>(bvh, &lanes, &c, active, hit),
+            None => {
+                let c = Coherent::none();
+                traverse::<false, F>(bvh, &lanes, &c, active, hit)
+            }
+        }
+    }
+
+    /// The traversal, for a coherent packet (`COHERENT`: every active lane's 1/d of one sign
+    /// and finite on each axis, see [`Coherent`]) or any other.
+    #[target_feature(enable = "avx")]
+    unsafe fn traverse<const COHERENT: bool, F: FnMut(usize, u32) -> u32>(
+        bvh: &WideBvh,
+        l: &Lanes,
+        coh: &Coherent,
+        active: u32,
+        hit: &mut F,
+    ) -> u32 {
         let widen = _mm256_set1_ps(1.0 + 2.0 * gamma(3));
         let zero = _mm256_setzero_ps();
-        let o = [
-            _mm_set1_ps(pk.o.x),
-            _mm_set1_ps(pk.o.y),
-            _mm_set1_ps(pk.o.z),
-        ];
-        let cull = Cull::new(&inv, t_max, active);
+        let inv = &l.inv;
         // (node, lanes that entered it); left uninitialised, entries are written before read.
         let mut stack = [const { MaybeUninit::<(u32, u32)>::uninit() }; STACK];
         let mut len = 0;
@@ -141,18 +162,35 @@ mod avx {
                 }
             } else {
                 let node = bvh.node(cur);
+                let slab = |s: usize| -> __m128 {
+                    debug_assert!(s < 6);
+                    // SAFETY: slab indices are below 6 (`Coherent::new`, or 0..6 below).
+                    (*node.bounds.get_unchecked(s)).into()
+                };
                 // The slabs relative to the origin, all four children at once: the single-ray
                 // test's `slab − o`, which the origin shared by all lanes lets us share too.
-                let rel: [__m128; 6] =
-                    std::array::from_fn(|s| _mm_sub_ps(node.bounds[s].into(), o[s / 2]));
-                let mut rel_f = [[0f32; 4]; 6];
-                for (r, v) in rel_f.iter_mut().zip(rel) {
-                    _mm_storeu_ps(r.as_mut_ptr(), v);
+                // A coherent packet needs only each axis's near and far slab (the same for
+                // all its lanes) and first culls the children no lane enters; any other
+                // needs both slabs and tests every child.
+                let mut rel = [[0f32; 4]; 6];
+                let mut cand = 0b1111;
+                if COHERENT {
+                    let near: [__m128; 3] =
+                        std::array::from_fn(|a| _mm_sub_ps(slab(coh.near[a]), l.o[a]));
+                    let far: [__m128; 3] =
+                        std::array::from_fn(|a| _mm_sub_ps(slab(coh.far[a]), l.o[a]));
+                    cand = coh.children(&near, &far);
+                    for a in 0..3 {
+                        _mm_storeu_ps(rel[2 * a].as_mut_ptr(), near[a]);
+                        _mm_storeu_ps(rel[2 * a + 1].as_mut_ptr(), far[a]);
+                    }
+                } else {
+                    for (s, r) in rel.iter_mut().enumerate() {
+                        _mm_storeu_ps(r.as_mut_ptr(), _mm_sub_ps(slab(s), l.o[s / 2]));
+                    }
                 }
-                let rel = rel_f;
                 let mut next = EMPTY;
                 let mut next_mask = 0;
-                let mut cand = cull.children(&rel);
                 while cand != 0 {
                     let c = cand.trailing_zeros() as usize;
                     cand &= cand - 1;
@@ -160,15 +198,21 @@ mod avx {
                     if child == EMPTY {
                         continue;
                     }
-                    // Per axis: the near and far slab of each lane by the sign of its 1/d
-                    // (blendv takes the second operand where the sign bit is set), times 1/d.
+                    // Per axis, the entry and exit distance of each lane: its near and far
+                    // slab times its 1/d. In a coherent packet `rel` holds them already; else
+                    // each lane picks them by the sign of its 1/d (blendv takes the second
+                    // operand where the sign bit is set).
                     let slabs = |a: usize| {
                         let lo = _mm256_set1_ps(rel[2 * a][c]);
                         let hi = _mm256_set1_ps(rel[2 * a + 1][c]);
-                        (
-                            _mm256_mul_ps(_mm256_blendv_ps(lo, hi, inv[a]), inv[a]),
-                            _mm256_mul_ps(_mm256_blendv_ps(hi, lo, inv[a]), inv[a]),
-                        )
+                        if COHERENT {
+                            (_mm256_mul_ps(lo, inv[a]), _mm256_mul_ps(hi, inv[a]))
+                        } else {
+                            (
+                                _mm256_mul_ps(_mm256_blendv_ps(lo, hi, inv[a]), inv[a]),
+                                _mm256_mul_ps(_mm256_blendv_ps(hi, lo, inv[a]), inv[a]),
+                            )
+                        }
                     };
                     let (tn_x, tf_x) = slabs(0);
                     let (tn_y, tf_y) = slabs(1);
@@ -177,7 +221,7 @@ mod avx {
                     // operand when either is NaN).
                     let tnear = _mm256_max_ps(_mm256_max_ps(_mm256_max_ps(tn_x, tn_y), tn_z), zero);
                     let tfar = _mm256_mul_ps(
-                        _mm256_min_ps(_mm256_min_ps(_mm256_min_ps(tf_x, tf_y), tf_z), t_max),
+                        _mm256_min_ps(_mm256_min_ps(_mm256_min_ps(tf_x, tf_y), tf_z), l.t_max),
                         widen,
                     );
                     let m =
@@ -213,43 +257,55 @@ mod avx {
         }
     }
 
-    /// The packet's rays taken together as one ray with an interval of reciprocal directions
-    /// per axis, for a test of a node's four children at once that rejects those that no
-    /// ray of the packet enters (most of them: three in four, in the TNCG15 room), before
-    /// the exact test of each ray against the others.
+    /// A packet whose active lanes have, on each axis, reciprocal directions of one sign and
+    /// finite (most of next-event estimation's: rays from a point to a small light). All its
+    /// lanes then use the same near and far slab per axis, and the packet can be taken as one
+    /// ray with an interval of reciprocal directions per axis, for a test of a node's four
+    /// children at once that rejects those no lane enters (three in four, in the TNCG15
+    /// room) before the exact test of each lane against the others.
     ///
-    /// It never rejects a box a ray enters: with every lane's 1/d of one sign and finite on
-    /// each axis, all lanes use the same near and far slab, and a rounded product x·(1/d)
-    /// is monotonic in 1/d, so its smallest and largest values over the lanes are those at
-    /// the smallest and largest 1/d. The bounds of the lanes' entry and exit distances so
-    /// obtained pass through the same max/min/widening as each lane's (monotonic too), so a
-    /// lane with entry ≤ exit makes the bounds pass. Packets whose directions differ in sign
-    /// on an axis, or lie in a coordinate plane (1/d infinite), are not culled.
-    struct Cull {
-        /// Whether the packet is coherent enough to cull at all.
-        on: bool,
+    /// That test never rejects a box a lane enters: a rounded product x·(1/d) is monotonic in
+    /// 1/d, so its smallest and largest values over the lanes are those at the smallest and
+    /// largest 1/d; the bounds of the lanes' entry and exit distances so obtained pass
+    /// through the same max/min/widening as each lane's (monotonic too), so a lane with
+    /// entry ≤ exit makes the bounds pass.
+    struct Coherent {
         near: [usize; 3],
         far: [usize; 3],
+        /// The smallest and largest 1/d of the active lanes, splatted.
         lo: [__m128; 3],
         hi: [__m128; 3],
+        /// The largest `t_max`.
         t_max: __m128,
     }
 
-    impl Cull {
+    impl Coherent {
+        fn none() -> Coherent {
+            // SAFETY: SSE is part of x86-64; never read (the general traversal ignores it).
+            let z = unsafe { _mm_setzero_ps() };
+            Coherent {
+                near: [0, 2, 4],
+                far: [1, 3, 5],
+                lo: [z; 3],
+                hi: [z; 3],
+                t_max: z,
+            }
+        }
+
         #[inline]
         #[target_feature(enable = "avx")]
-        fn new(inv: &[__m256; 3], t_max: __m256, active: u32) -> Cull {
+        fn new(l: &Lanes, active: u32) -> Option<Coherent> {
             // The active lanes as a mask: lane l's bit of `active`, tested in place (the
             // integer bits compare as tiny non-zero floats; AVX1 has no integer compare).
             let bits = _mm256_castsi256_ps(_mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128));
-            let lanes = _mm256_and_ps(_mm256_castsi256_ps(_mm256_set1_epi32(active as i32)), bits);
-            let on_lane = _mm256_cmp_ps::<_CMP_NEQ_UQ>(lanes, _mm256_setzero_ps());
+            let set = _mm256_and_ps(_mm256_castsi256_ps(_mm256_set1_epi32(active as i32)), bits);
+            let on = _mm256_cmp_ps::<_CMP_NEQ_UQ>(set, _mm256_setzero_ps());
             let (inf, ninf) = (
                 _mm256_set1_ps(f32::INFINITY),
                 _mm256_set1_ps(f32::NEG_INFINITY),
             );
+            // Per axis, the lanes' minimum (or maximum) in all four lanes of the result.
             let reduce = |v: __m256, max: bool| {
-                let (a, b) = (_mm256_castps256_ps128(v), _mm256_extractf128_ps::<1>(v));
                 let f = |x, y| {
                     if max {
                         _mm_max_ps(x, y)
@@ -257,48 +313,45 @@ mod avx {
                         _mm_min_ps(x, y)
                     }
                 };
-                let v = f(a, b);
-                let v = f(v, _mm_movehl_ps(v, v));
-                _mm_cvtss_f32(f(v, _mm_shuffle_ps::<0b01>(v, v)))
+                let v = f(_mm256_castps256_ps128(v), _mm256_extractf128_ps::<1>(v));
+                let v = f(v, _mm_shuffle_ps::<0b01_00_11_10>(v, v));
+                f(v, _mm_shuffle_ps::<0b10_11_00_01>(v, v))
             };
-            let mut on = true;
-            let (mut lo, mut hi) = ([_mm_setzero_ps(); 3], [_mm_setzero_ps(); 3]);
-            let (mut near, mut far) = ([0; 3], [0; 3]);
+            let lo = l.inv.map(|v| reduce(_mm256_blendv_ps(inf, v, on), false));
+            let hi = l.inv.map(|v| reduce(_mm256_blendv_ps(ninf, v, on), true));
+            // One sign and finite on every axis: 0 < lo or hi < 0, and both below ∞ in
+            // magnitude (NaN fails every test).
+            let (zero, big) = (_mm_setzero_ps(), _mm_set1_ps(f32::MAX));
+            let abs = |v: __m128| _mm_andnot_ps(_mm_set1_ps(-0.0), v);
+            let mut ok = 0b1111;
             for a in 0..3 {
-                let min = reduce(_mm256_blendv_ps(inf, inv[a], on_lane), false);
-                let max = reduce(_mm256_blendv_ps(ninf, inv[a], on_lane), true);
-                // One sign and finite (NaN fails both tests).
-                on &= (min > 0.0 || max < 0.0)
-                    && min.abs() < f32::INFINITY
-                    && max.abs() < f32::INFINITY;
-                let neg = (max < 0.0) as usize;
-                (near[a], far[a]) = (2 * a + neg, 2 * a + 1 - neg);
-                (lo[a], hi[a]) = (_mm_set1_ps(min), _mm_set1_ps(max));
+                let sign = _mm_or_ps(_mm_cmplt_ps(zero, lo[a]), _mm_cmplt_ps(hi[a], zero));
+                let finite =
+                    _mm_and_ps(_mm_cmple_ps(abs(lo[a]), big), _mm_cmple_ps(abs(hi[a]), big));
+                ok &= _mm_movemask_ps(_mm_and_ps(sign, finite));
             }
-            Cull {
-                on,
-                near,
-                far,
+            if ok != 0b1111 {
+                return None;
+            }
+            let neg: [usize; 3] = std::array::from_fn(|a| (_mm_cvtss_f32(hi[a]) < 0.0) as usize);
+            Some(Coherent {
+                near: std::array::from_fn(|a| 2 * a + neg[a]),
+                far: std::array::from_fn(|a| 2 * a + 1 - neg[a]),
                 lo,
                 hi,
-                t_max: _mm_set1_ps(reduce(_mm256_blendv_ps(ninf, t_max, on_lane), true)),
-            }
+                t_max: reduce(_mm256_blendv_ps(ninf, l.t_max, on), true),
+            })
         }
 
-        /// Bit c: child c may be entered by some ray (`rel`: the node's slabs minus the
-        /// origin).
+        /// Bit c: child c may be entered by some lane (`near`, `far`: the node's near and far
+        /// slabs minus the origin).
         #[inline]
         #[target_feature(enable = "avx")]
-        fn children(&self, rel: &[[f32; 4]; 6]) -> u32 {
-            if !self.on {
-                return 0b1111;
-            }
-            // SAFETY: reads the four floats of rel[s].
-            let slab = |s: usize| unsafe { _mm_loadu_ps(rel[s].as_ptr()) };
+        fn children(&self, near: &[__m128; 3], far: &[__m128; 3]) -> u32 {
             let mut tn = [_mm_setzero_ps(); 3];
             let mut tf = [_mm_setzero_ps(); 3];
             for a in 0..3 {
-                let (n, f) = (slab(self.near[a]), slab(self.far[a]));
+                let (n, f) = (near[a], far[a]);
                 tn[a] = _mm_min_ps(_mm_mul_ps(n, self.lo[a]), _mm_mul_ps(n, self.hi[a]));
                 tf[a] = _mm_max_ps(_mm_mul_ps(f, self.lo[a]), _mm_mul_ps(f, self.hi[a]));
             }
