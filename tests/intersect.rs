@@ -954,9 +954,9 @@ fn shadow_packets_match_single_rays() {
             };
         }
         let active = if i % 4 == 0 {
-            (rng.f() * 256.0) as u32
+            (rng.f() * (1 << PACKET) as f32) as u32
         } else {
-            0xff
+            (1 << PACKET) - 1
         };
         let got = soup.scene.occluded_packet(&pk, active);
         for lane in 0..PACKET {

@@ -22,7 +22,11 @@ use crate::geometry::{ray::gamma, Ray};
 use glam::Vec3A;
 
 /// Rays in a packet.
-pub const PACKET: usize = 8;
+pub const PACKET: usize = 16;
+
+/// AVX registers (eight lanes each) per packet quantity.
+#[cfg(target_arch = "x86_64")]
+const HALVES: usize = PACKET / 8;
 
 /// Up to eight shadow rays that share their origin.
 #[derive(Clone, Copy, Debug)]
@@ -98,8 +102,8 @@ mod avx {
     /// What every box test of a packet needs, in registers.
     struct Lanes {
         /// 1/d as `Vec3A::recip` computes it (a division, not an approximation).
-        inv: [__m256; 3],
-        t_max: __m256,
+        inv: [[__m256; HALVES]; 3],
+        t_max: [__m256; HALVES],
         /// The origin, splatted for the four children of a node.
         o: [__m128; 3],
     }
@@ -113,10 +117,12 @@ mod avx {
         active: u32,
         hit: &mut F,
     ) -> u32 {
-        let load = |a: &[f32; PACKET]| _mm256_loadu_ps(a.as_ptr());
+        let load = |a: &[f32; PACKET]| -> [__m256; HALVES] {
+            std::array::from_fn(|h| _mm256_loadu_ps(a[8 * h..].as_ptr()))
+        };
         let one = _mm256_set1_ps(1.0);
         let lanes = Lanes {
-            inv: pk.d.map(|d| _mm256_div_ps(one, load(&d))),
+            inv: pk.d.map(|d| load(&d).map(|v| _mm256_div_ps(one, v))),
             t_max: load(&pk.t_max),
             o: [pk.o.x, pk.o.y, pk.o.z].map(|x| _mm_set1_ps(x)),
         };
@@ -201,31 +207,45 @@ mod avx {
                     // Per axis, the entry and exit distance of each lane: its near and far
                     // slab times its 1/d. In a coherent packet `rel` holds them already; else
                     // each lane picks them by the sign of its 1/d (blendv takes the second
-                    // operand where the sign bit is set).
-                    let slabs = |a: usize| {
-                        let lo = _mm256_set1_ps(rel[2 * a][c]);
-                        let hi = _mm256_set1_ps(rel[2 * a + 1][c]);
-                        if COHERENT {
-                            (_mm256_mul_ps(lo, inv[a]), _mm256_mul_ps(hi, inv[a]))
-                        } else {
-                            (
-                                _mm256_mul_ps(_mm256_blendv_ps(lo, hi, inv[a]), inv[a]),
-                                _mm256_mul_ps(_mm256_blendv_ps(hi, lo, inv[a]), inv[a]),
-                            )
+                    // operand where the sign bit is set). Eight lanes at a time, skipping
+                    // eights with no lane in the mask.
+                    let lo: [__m256; 3] = std::array::from_fn(|a| _mm256_set1_ps(rel[2 * a][c]));
+                    let hi: [__m256; 3] =
+                        std::array::from_fn(|a| _mm256_set1_ps(rel[2 * a + 1][c]));
+                    let mut m = 0;
+                    for h in 0..HALVES {
+                        if (mask >> (8 * h)) & 0xff == 0 {
+                            continue;
                         }
-                    };
-                    let (tn_x, tf_x) = slabs(0);
-                    let (tn_y, tf_y) = slabs(1);
-                    let (tn_z, tf_z) = slabs(2);
-                    // The operand order of `RayBoxes::test` (max/min return the second
-                    // operand when either is NaN).
-                    let tnear = _mm256_max_ps(_mm256_max_ps(_mm256_max_ps(tn_x, tn_y), tn_z), zero);
-                    let tfar = _mm256_mul_ps(
-                        _mm256_min_ps(_mm256_min_ps(_mm256_min_ps(tf_x, tf_y), tf_z), l.t_max),
-                        widen,
-                    );
-                    let m =
-                        _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tnear, tfar)) as u32 & mask;
+                        let slabs = |a: usize| {
+                            let inv = inv[a][h];
+                            if COHERENT {
+                                (_mm256_mul_ps(lo[a], inv), _mm256_mul_ps(hi[a], inv))
+                            } else {
+                                (
+                                    _mm256_mul_ps(_mm256_blendv_ps(lo[a], hi[a], inv), inv),
+                                    _mm256_mul_ps(_mm256_blendv_ps(hi[a], lo[a], inv), inv),
+                                )
+                            }
+                        };
+                        let (tn_x, tf_x) = slabs(0);
+                        let (tn_y, tf_y) = slabs(1);
+                        let (tn_z, tf_z) = slabs(2);
+                        // The operand order of `RayBoxes::test` (max/min return the second
+                        // operand when either is NaN).
+                        let tnear =
+                            _mm256_max_ps(_mm256_max_ps(_mm256_max_ps(tn_x, tn_y), tn_z), zero);
+                        let tfar = _mm256_mul_ps(
+                            _mm256_min_ps(
+                                _mm256_min_ps(_mm256_min_ps(tf_x, tf_y), tf_z),
+                                l.t_max[h],
+                            ),
+                            widen,
+                        );
+                        let enter = _mm256_cmp_ps::<_CMP_LE_OQ>(tnear, tfar);
+                        m |= (_mm256_movemask_ps(enter) as u32) << (8 * h);
+                    }
+                    let m = m & mask;
                     if m == 0 {
                         continue;
                     }
@@ -295,17 +315,33 @@ mod avx {
         #[inline]
         #[target_feature(enable = "avx")]
         fn new(l: &Lanes, active: u32) -> Option<Coherent> {
-            // The active lanes as a mask: lane l's bit of `active`, tested in place (the
-            // integer bits compare as tiny non-zero floats; AVX1 has no integer compare).
+            // The active lanes as masks, eight at a time: lane l's bit of `active`, tested
+            // in place (the integer bits compare as tiny non-zero floats; AVX1 has no
+            // integer compare).
             let bits = _mm256_castsi256_ps(_mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128));
-            let set = _mm256_and_ps(_mm256_castsi256_ps(_mm256_set1_epi32(active as i32)), bits);
-            let on = _mm256_cmp_ps::<_CMP_NEQ_UQ>(set, _mm256_setzero_ps());
+            let on: [__m256; HALVES] = std::array::from_fn(|h| {
+                let word = _mm256_set1_epi32((active >> (8 * h)) as i32);
+                let set = _mm256_and_ps(_mm256_castsi256_ps(word), bits);
+                _mm256_cmp_ps::<_CMP_NEQ_UQ>(set, _mm256_setzero_ps())
+            });
             let (inf, ninf) = (
                 _mm256_set1_ps(f32::INFINITY),
                 _mm256_set1_ps(f32::NEG_INFINITY),
             );
-            // Per axis, the lanes' minimum (or maximum) in all four lanes of the result.
-            let reduce = |v: __m256, max: bool| {
+            // The active lanes' minimum (or maximum) of `v`, in all four lanes of the result.
+            let reduce = |v: &[__m256; HALVES], max: bool| {
+                let fill = if max { ninf } else { inf };
+                let f8 = |x, y| {
+                    if max {
+                        _mm256_max_ps(x, y)
+                    } else {
+                        _mm256_min_ps(x, y)
+                    }
+                };
+                let mut w = _mm256_blendv_ps(fill, v[0], on[0]);
+                for h in 1..HALVES {
+                    w = f8(w, _mm256_blendv_ps(fill, v[h], on[h]));
+                }
                 let f = |x, y| {
                     if max {
                         _mm_max_ps(x, y)
@@ -313,12 +349,12 @@ mod avx {
                         _mm_min_ps(x, y)
                     }
                 };
-                let v = f(_mm256_castps256_ps128(v), _mm256_extractf128_ps::<1>(v));
-                let v = f(v, _mm_shuffle_ps::<0b01_00_11_10>(v, v));
-                f(v, _mm_shuffle_ps::<0b10_11_00_01>(v, v))
+                let w = f(_mm256_castps256_ps128(w), _mm256_extractf128_ps::<1>(w));
+                let w = f(w, _mm_shuffle_ps::<0b01_00_11_10>(w, w));
+                f(w, _mm_shuffle_ps::<0b10_11_00_01>(w, w))
             };
-            let lo = l.inv.map(|v| reduce(_mm256_blendv_ps(inf, v, on), false));
-            let hi = l.inv.map(|v| reduce(_mm256_blendv_ps(ninf, v, on), true));
+            let lo = l.inv.map(|v| reduce(&v, false));
+            let hi = l.inv.map(|v| reduce(&v, true));
             // One sign and finite on every axis: 0 < lo or hi < 0, and both below ∞ in
             // magnitude (NaN fails every test).
             let (zero, big) = (_mm_setzero_ps(), _mm_set1_ps(f32::MAX));
@@ -339,7 +375,7 @@ mod avx {
                 far: std::array::from_fn(|a| 2 * a + 1 - neg[a]),
                 lo,
                 hi,
-                t_max: reduce(_mm256_blendv_ps(ninf, l.t_max, on), true),
+                t_max: reduce(&l.t_max, true),
             })
         }
 
