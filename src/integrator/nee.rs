@@ -71,7 +71,20 @@ pub(crate) fn sample_lights(
     let delta = sampler.next_3d();
     match scene.lights.single_planar() {
         // One sample gains nothing from lanes; it takes the general path, as it always did.
-        Some(light) if n > 1 => planar(scene, light, si, frame, wo, material, n, delta, stats),
+        Some(light) if n > 1 => {
+            // What the BSDF is for every sample: a Lambertian one seen from a side it reflects
+            // on is a constant colour times the cosine, with the cosine's pdf (its own
+            // variant, without the arrays the others need); the others are evaluated sample
+            // by sample.
+            let planar = match &material.bsdf {
+                Bsdf::Lambert(_) => match material_side(material, wo) {
+                    Some(_) => planar::<true>,
+                    None => return Color::ZERO, // a one-sided surface seen from behind
+                },
+                _ => planar::<false>,
+            };
+            planar(scene, light, si, frame, wo, material, n, delta, stats)
+        }
         _ => any_lights(scene, si, frame, wo, material, n, delta, stats),
     }
 }
@@ -200,7 +213,7 @@ fn sqrt4(x: Vec4) -> Vec4 {
 /// `Interaction::spawn_ray_to`, the power heuristic), so the estimator is the same.
 #[inline(never)]
 #[allow(clippy::too_many_arguments)]
-fn planar(
+fn planar<const LAMBERT: bool>(
     scene: &Scene,
     light: &PlanarLight,
     si: &Interaction,
@@ -211,15 +224,10 @@ fn planar(
     delta: [f32; 3],
     stats: &mut RayStats,
 ) -> Color {
-    // What the BSDF is for every sample: a Lambertian one seen from a side it reflects on
-    // is a constant colour times the cosine, with the cosine's pdf; the others are evaluated
-    // sample by sample.
-    let lambert = match &material.bsdf {
-        Bsdf::Lambert(b) => match material_side(material, wo) {
-            Some(side) => Some((b.albedo, side)),
-            None => return Color::ZERO, // a one-sided surface seen from behind
-        },
-        _ => None,
+    // Lambertian: the albedo and the side `wo` is on (`sample_lights` checked it is lit).
+    let (albedo, side) = match (&material.bsdf, material_side(material, wo)) {
+        (Bsdf::Lambert(b), Some(side)) => (b.albedo, side),
+        _ => (Color::ZERO, 1.0),
     };
     let p = si.p;
     // The two possible ray origins, above and below the surface (`offset_ray_origin`).
@@ -237,7 +245,7 @@ fn planar(
     let nf = n as f32;
     let (inv_n, area) = (Vec4::splat(1.0 / nf), Vec4::splat(light.area));
     let lane = Vec4::new(0.0, 1.0, 2.0, 3.0);
-    let side = Vec4::splat(lambert.map_or(1.0, |l| l.1));
+    let side = Vec4::splat(side);
     let mut sum_scalar = 0.0f32;
     let mut sum = Color::ZERO;
     let mut i = 0;
@@ -277,7 +285,7 @@ fn planar(
             let under = dot(&ng, &d).cmplt(Vec4::ZERO);
             let mut good =
                 jv.cmplt(Vec4::splat(nf)) & dist2.cmpgt(Vec4::ZERO) & cos_l.cmpgt(Vec4::ZERO);
-            if lambert.is_some() {
+            if LAMBERT {
                 // f·|cos| = (ρ/π)·c and p_bsdf = c/π, with c the cosine on the lit side; ρ/π is
                 // applied to the sum.
                 let c = cos * side;
@@ -310,7 +318,7 @@ fn planar(
         }
         // Other BSDFs, sample by sample.
         let mut colour = [Color::ZERO; BATCH];
-        if lambert.is_none() {
+        if !LAMBERT {
             let mut mm = ok;
             while mm != 0 {
                 let l = mm.trailing_zeros() as usize;
@@ -340,7 +348,7 @@ fn planar(
         while visible != 0 {
             let l = visible.trailing_zeros() as usize;
             visible &= visible - 1;
-            if lambert.is_some() {
+            if LAMBERT {
                 sum_scalar += weight[l];
             } else {
                 sum += colour[l] * weight[l];
@@ -348,9 +356,10 @@ fn planar(
         }
         i += m;
     }
-    let sum = match lambert {
-        Some((albedo, _)) => albedo * FRAC_1_PI * light.radiance * sum_scalar,
-        None => sum * light.radiance,
+    let sum = if LAMBERT {
+        albedo * FRAC_1_PI * light.radiance * sum_scalar
+    } else {
+        sum * light.radiance
     };
     sum / nf
 }
