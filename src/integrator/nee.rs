@@ -13,13 +13,12 @@
 //! the light evenly rather than clump, which lowers the variance, and they cost one request
 //! instead of n. With n = 1 the only sample is Δ itself, as before.
 //!
-//! The shadow rays of a vertex share their origin and are traced as packets of up to eight
+//! The shadow rays of a vertex share their origin and are traced as packets of up to sixteen
 //! ([`crate::accel::ShadowPacket`]). When the scene's only light is a triangle or a
 //! parallelogram (`Lights::single_planar`, the case of most test scenes and of the TNCG15
-//! room), the batch's samples, BSDF values and MIS weights are computed lane by lane in
-//! plain arrays that the compiler turns into SIMD code, with everything the samples share
-//! (the light choice, the light's offset, the material's side, a Lambertian BSDF's colour)
-//! worked out once per vertex.
+//! room), the batch's samples, BSDF values and MIS weights are computed four lanes at a time
+//! (glam's `Vec4`), with everything the samples share (the light choice, the light's offset,
+//! the material's side, a Lambertian BSDF's colour) worked out once per vertex.
 
 use crate::accel::{ShadowPacket, PACKET};
 use crate::geometry::ray::{offset_ray_origin, SHADOW_EPSILON};

@@ -1,13 +1,15 @@
-//! Occlusion of up to eight shadow rays from one origin in one traversal of the 4-wide BVH.
+//! Occlusion of up to sixteen shadow rays from one origin in one traversal of the 4-wide BVH.
 //!
 //! Next-event estimation sends its shadow rays from one shading point to nearby points on
 //! the lights, so the rays of one vertex visit nearly the same nodes. Traced together, each
 //! node is fetched and its loop, stack and branches paid once for all of them, and each
-//! child box is tested against all eight rays in one 8-lane AVX pass (rays in lanes, in the
+//! child box is tested against eight rays per 8-lane AVX instruction (rays in lanes, in the
 //! manner of Wald, Slusallek, Benthin and Wagner, "Interactive Rendering with Coherent Ray
-//! Tracing", Eurographics 2001, with the rays' lanes masked as in Benthin's packet
-//! traversal). A ray found occluded leaves the mask; a subtree is entered only for the rays
-//! that enter its box.
+//! Tracing", Eurographics 2001, with a mask of active rays). A ray found occluded leaves the
+//! mask; a subtree is entered only for the rays that enter its box. Before the exact tests a
+//! node's four children are culled against the packet's interval of directions (interval
+//! arithmetic culling, as in Boulos et al., "Packet-based Whitted and Distribution Ray
+//! Tracing", Graphics Interface 2007), see `avx::Coherent`.
 //!
 //! The answers are exactly those of [`WideBvh::occluded`] for each ray on its own: every
 //! box test computes the same IEEE operations on the same operands, in the same order
@@ -28,7 +30,8 @@ pub const PACKET: usize = 16;
 #[cfg(target_arch = "x86_64")]
 const HALVES: usize = PACKET / 8;
 
-/// Up to eight shadow rays that share their origin.
+/// Up to sixteen shadow rays that share their origin (sixteen: the ten of the TNCG15
+/// report's Figure 3.3 in one traversal).
 #[derive(Clone, Copy, Debug)]
 pub struct ShadowPacket {
     pub o: Vec3A,
