@@ -927,3 +927,79 @@ fn bvh_handles_negative_zero_direction_components() {
     let hits = check_rays(&soup, rays.into_iter(), &mut rng);
     assert!(hits > 100, "{hits} hits");
 }
+
+/// Shadow-ray packets (eight rays from one origin, traced together, with AVX where the CPU
+/// has it) give each ray exactly the answer of its own traversal and of brute force: rays
+/// to points in the cloud and beyond it, with axis-parallel directions and −0.0 components
+/// among them, random `t_max` per lane, and random sets of active lanes.
+#[test]
+fn shadow_packets_match_single_rays() {
+    use mcrt::accel::{ShadowPacket, PACKET};
+    let mut rng = Rng::new(8);
+    let soup = Soup::new(&mut rng, 3000, 40);
+    let (mut occluded, mut lanes) = (0, 0);
+    for i in 0..3000 {
+        let o = if i % 2 == 0 {
+            rng.ball() * 12.0
+        } else {
+            rng.dir() * 30.0
+        };
+        // A target region: small (coherent rays, as next-event estimation sends) or large.
+        let (c, r) = (rng.ball() * 10.0, if i % 3 == 0 { 8.0 } else { 0.5 });
+        let mut pk = ShadowPacket {
+            o,
+            d: [[0.0; PACKET]; 3],
+            t_max: [0.0; PACKET],
+        };
+        // Some packets aim at points on one triangle's edges (the lanes `Triangle::occludes4`
+        // leaves to the f64 test), beyond the triangle so that it is the blocker.
+        let tri = soup.tris[(rng.f() * soup.tris.len() as f32) as usize % soup.tris.len()];
+        for lane in 0..PACKET {
+            let target = if i % 5 == 1 {
+                let (a, b) = [(tri.p0, tri.p1), (tri.p1, tri.p2), (tri.p2, tri.p0)][lane % 3];
+                o + (a + (b - a) * rng.f() - o) * 1.5
+            } else {
+                c + rng.ball() * r
+            };
+            let mut d = (target - o).to_array();
+            match (i + lane) % 11 {
+                0 => d[lane % 3] = 0.0,
+                1 => d[lane % 3] = -0.0,
+                2 => {
+                    d = [0.0; 3];
+                    d[lane % 3] = if rng.f() < 0.5 { 1.0 } else { -1.0 };
+                }
+                _ => {}
+            }
+            (pk.d[0][lane], pk.d[1][lane], pk.d[2][lane]) = (d[0], d[1], d[2]);
+            pk.t_max[lane] = if rng.f() < 0.5 {
+                1.0 - 1e-4
+            } else {
+                rng.range(0.0, 3.0)
+            };
+        }
+        let active = if i % 4 == 0 {
+            (rng.f() * (1 << PACKET) as f32) as u32
+        } else {
+            (1 << PACKET) - 1
+        };
+        let got = soup.scene.occluded_packet(&pk, active);
+        for lane in 0..PACKET {
+            let want_lane = active & (1 << lane) != 0;
+            let ray = pk.ray(lane);
+            let single = want_lane && soup.scene.occluded(&ray, pk.t_max[lane]);
+            let brute = want_lane && soup.brute(&ray, pk.t_max[lane]).is_some();
+            assert_eq!(
+                got & (1 << lane) != 0,
+                single,
+                "packet {i} lane {lane} (active {active:#x}): {ray:?}, t_max {}",
+                pk.t_max[lane]
+            );
+            assert_eq!(single, brute, "packet {i} lane {lane}: {ray:?}");
+            occluded += single as u32;
+            lanes += want_lane as u32;
+        }
+    }
+    eprintln!("packets: {occluded} of {lanes} rays occluded");
+    assert!(occluded > lanes / 10 && occluded < lanes * 9 / 10);
+}

@@ -3,4 +3,4 @@
 pub mod bvh;
 pub mod wide;
 pub use bvh::Bvh;
-pub use wide::WideBvh;
+pub use wide::{ShadowPacket, WideBvh, PACKET};

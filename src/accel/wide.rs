@@ -6,9 +6,12 @@
 //! Traversal using Multi-branching BVHs", RT 2008: a node adopts its children's children,
 //! largest surface area first, until it has four. Leaves stay as in the binary tree.
 
+mod packet;
+
 use super::bvh::Bvh;
 use crate::geometry::{ray::gamma, Aabb, Ray};
 use glam::Vec4;
+pub use packet::{ShadowPacket, PACKET};
 
 /// A child reference: an inner node index, or a leaf (high bit set) packing the first
 /// primitive (27 bits) and the primitive count (4 bits).

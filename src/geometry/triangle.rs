@@ -1,7 +1,7 @@
 //! Triangles and the Möller–Trumbore ray–triangle test.
 
 use super::ray::{gamma, Ray};
-use glam::{DVec3, Vec3A};
+use glam::{DVec3, Vec3A, Vec4};
 
 /// A triangle stored by its vertices (Möller and Trumbore, "Fast, Minimum Storage
 /// Ray/Triangle Intersection", JGT 2(1), 1997, derive the edges on the fly).
@@ -57,6 +57,44 @@ impl Triangle {
             return None;
         }
         self.intersect_f64(ray, t_max)
+    }
+
+    /// [`Triangle::intersect`]'s fast path for four rays from one origin `o` (directions
+    /// `d` by axis, a lane per ray): the lanes it finds hit before their `t_max`, and the
+    /// lanes near an edge that it leaves to `intersect` (whose f64 test decides them). The
+    /// same IEEE operations in the same order as `intersect` (glam's cross product and dot
+    /// product, `f32::min`'s way with NaN), so every other lane gets `intersect`'s answer;
+    /// what the rays share (s = o − p0, q = s × e1, e2 · q) is computed once.
+    #[inline(always)]
+    pub fn occludes4(&self, o: Vec3A, d: [Vec4; 3], t_max: Vec4) -> (u32, u32) {
+        let e1 = self.p1 - self.p0;
+        let e2 = self.p2 - self.p0;
+        let s = o - self.p0;
+        let q = s.cross(e1);
+        let t_num = Vec4::splat(e2.dot(q));
+        let sp = |v: Vec3A| [Vec4::splat(v.x), Vec4::splat(v.y), Vec4::splat(v.z)];
+        let (e1, e2, s, q) = (sp(e1), sp(e2), sp(s), sp(q));
+        let dot = |a: &[Vec4; 3], b: &[Vec4; 3]| (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2];
+        // p = d × e2, component by component as glam computes it.
+        let p = [
+            d[1] * e2[2] - e2[1] * d[2],
+            d[2] * e2[0] - e2[2] * d[0],
+            d[0] * e2[1] - e2[0] * d[1],
+        ];
+        let inv_det = Vec4::ONE / dot(&e1, &p);
+        let u = dot(&s, &p) * inv_det;
+        let v = dot(&d, &q) * inv_det;
+        let w = Vec4::ONE - u - v;
+        // min(min(u, v), w) > ε, where f32::min ignores a NaN operand: every value that is
+        // not NaN exceeds ε, and not all three are NaN.
+        let eps = Vec4::splat(EDGE_EPS);
+        let nan = |x: Vec4| x.cmpne(x);
+        let above = |x: Vec4| !x.cmple(eps); // true for NaN
+        let clear = above(u) & above(v) & above(w) & !(nan(u) & nan(v) & nan(w));
+        let t = t_num * inv_det;
+        let hit = clear & t.cmpgt(Vec4::ZERO) & t.cmplt(t_max);
+        let out = u.cmplt(-eps) | v.cmplt(-eps) | (u + v).cmpgt(Vec4::splat(1.0 + EDGE_EPS));
+        (hit.bitmask(), !(clear | out).bitmask() & 15)
     }
 
     #[cold]

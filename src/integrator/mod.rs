@@ -10,18 +10,17 @@
 //!   whole-image driver ([`sppm::render_sppm`]).
 
 pub mod direct;
+mod nee;
 pub mod path;
 pub mod photon;
 pub mod sppm;
 
-use crate::geometry::{Frame, Ray};
 use crate::material::sampling::power_heuristic;
-use crate::material::Material;
 use crate::sampler::Sampler;
 use crate::scene::{Interaction, Scene};
 use crate::Color;
 use glam::Vec3A;
-use std::mem::MaybeUninit;
+pub(crate) use nee::sample_lights;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum IntegratorKind {
@@ -156,73 +155,6 @@ pub fn li(
         }
         IntegratorKind::Direct => direct::li(scene, ray, sampler, p, stats),
     }
-}
-
-/// Next-event estimation at a non-specular vertex: `n` shadow rays to points chosen on the
-/// lights, each weighted against BSDF sampling by the power heuristic. With n light samples
-/// and one BSDF sample, Veach's multi-sample estimator (thesis eq. 9.10) gives each light
-/// sample the weight w = (n·p_light)² / ((n·p_light)² + p_bsdf²) and divides the sum by n.
-///
-/// The samples are taken in batches: first every light sample of the batch and its
-/// unoccluded contribution (chains of square roots and divisions that the processor can
-/// overlap when they do not wait on each other), then the shadow rays. Random numbers are
-/// drawn, and contributions summed, in the same order as one sample at a time would.
-#[inline]
-#[allow(clippy::too_many_arguments)] // the hot path: plain arguments, no context struct
-pub(crate) fn sample_lights(
-    scene: &Scene,
-    si: &Interaction,
-    frame: &Frame,
-    wo: Vec3A,
-    material: &Material,
-    n: u32,
-    sampler: &mut Sampler,
-    stats: &mut RayStats,
-) -> Color {
-    const BATCH: u32 = 8;
-    let mut sum = Color::ZERO;
-    // Left uninitialised: entry k is written before it is read.
-    let mut pending = [const { MaybeUninit::<(Ray, f32, Color)>::uninit() }; BATCH as usize];
-    let mut left = n;
-    while left > 0 {
-        let m = left.min(BATCH);
-        left -= m;
-        let mut k = 0;
-        for _ in 0..m {
-            let [ux, uy, u_sel] = sampler.next_3d();
-            let u = glam::Vec2::new(ux, uy);
-            let Some(ls) = scene.lights.sample(si.p, u_sel, u) else {
-                continue;
-            };
-            let wi = frame.to_local(ls.wi);
-            let (f, bsdf_pdf) = material.eval_pdf(wo, wi);
-            let f = f * wi.z.abs();
-            if f == Color::ZERO {
-                continue;
-            }
-            let (ray, t_max) = if ls.infinite {
-                (si.spawn_ray(ls.wi), f32::INFINITY)
-            } else {
-                si.spawn_ray_to(ls.p, ls.p_err, ls.n)
-            };
-            let w = if ls.delta {
-                1.0
-            } else {
-                power_heuristic(n as f32 * ls.pdf, bsdf_pdf)
-            };
-            pending[k].write((ray, t_max, f * ls.le * (w / ls.pdf)));
-            k += 1;
-        }
-        stats.shadow_rays += k as u64;
-        for p in &pending[..k] {
-            // SAFETY: the first k entries were written above.
-            let (ray, t_max, contribution) = unsafe { p.assume_init_ref() };
-            if !scene.occluded(ray, *t_max) {
-                sum += *contribution;
-            }
-        }
-    }
-    sum / n as f32
 }
 
 /// Radiance of the environment along a ray `d` that left the scene, weighted against light

@@ -177,6 +177,46 @@ pub struct LightSample {
     pub infinite: bool,
 }
 
+/// The scene's only light, when it is a triangle or a parallelogram, with what next-event
+/// estimation's batched path (`integrator::nee`) needs, computed once.
+#[derive(Clone, Copy, Debug)]
+pub struct PlanarLight {
+    /// A point on the light is `a·w0 + b·w1 + c·w2`, with weights (1, u, v) for a
+    /// parallelogram (`a, b, c` = p0, e1, e2) or barycentric ones for a triangle (its
+    /// vertices): the expressions of `AreaLight::sample_point`.
+    pub a: Vec3A,
+    pub b: Vec3A,
+    pub c: Vec3A,
+    pub triangle: bool,
+    /// The emitting side's unit normal.
+    pub normal: Vec3A,
+    /// `offset_ray_origin`'s push off the light for any sampled point: the normal times
+    /// twice the error bound's projection on it.
+    pub offset: Vec3A,
+    pub area: f32,
+    pub radiance: Color,
+}
+
+impl PlanarLight {
+    fn new(l: &AreaLight) -> Option<PlanarLight> {
+        let (a, b, c, triangle) = match l.shape {
+            LightShape::Triangle(t) => (t.p0, t.p1, t.p2, true),
+            LightShape::Parallelogram { p0, e1, e2 } => (p0, e1, e2, false),
+            LightShape::Sphere(_) => return None,
+        };
+        Some(PlanarLight {
+            a,
+            b,
+            c,
+            triangle,
+            normal: l.normal,
+            offset: l.normal * (2.0 * l.normal.abs().dot(l.err)),
+            area: l.area,
+            radiance: l.radiance,
+        })
+    }
+}
+
 #[derive(Clone, Debug, Default)]
 pub struct Lights {
     /// Area lights, indexed by the `light` of the primitives that emit.
@@ -187,6 +227,8 @@ pub struct Lights {
     distribution: Distribution1D,
     /// Index in `others` of the constant environment light, if any.
     env: Option<usize>,
+    /// The only light, if there is one and it is planar.
+    planar: Option<PlanarLight>,
 }
 
 impl Lights {
@@ -205,12 +247,25 @@ impl Lights {
         let env = others
             .iter()
             .position(|o| matches!(o, OtherLight::Constant { .. }));
+        let distribution = Distribution1D::new(&powers);
+        let planar = match (&lights[..], others.len(), distribution.len()) {
+            ([l], 0, 1) => PlanarLight::new(l),
+            _ => None,
+        };
         Lights {
-            distribution: Distribution1D::new(&powers),
+            distribution,
             lights,
             others,
             env,
+            planar,
         }
+    }
+
+    /// The scene's only light, if it is a triangle or a parallelogram (chosen with
+    /// probability one).
+    #[inline]
+    pub fn single_planar(&self) -> Option<&PlanarLight> {
+        self.planar.as_ref()
     }
 
     pub fn is_empty(&self) -> bool {

@@ -16,13 +16,13 @@ pub mod xml;
 pub use desc::{GeometryDesc, SceneDesc, ShapeDesc};
 pub use error::SceneError;
 
-use crate::accel::WideBvh;
+use crate::accel::{ShadowPacket, WideBvh, PACKET};
 use crate::camera::CameraDesc;
 use crate::geometry::ray::{offset_ray_origin, SHADOW_EPSILON};
 use crate::geometry::{Ray, Sphere, Triangle};
 use crate::light::Lights;
 use crate::material::Material;
-use glam::{Vec2, Vec3A};
+use glam::{Vec2, Vec3A, Vec4};
 
 pub const NO_LIGHT: u32 = u32::MAX;
 
@@ -267,6 +267,49 @@ impl Scene {
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
         self.bvh
             .occluded(ray, t_max, |i, t_max| self.hit(ray, i, t_max).is_some())
+    }
+
+    /// The lanes of `active` whose rays are blocked before their `t_max`: the answers of
+    /// [`Scene::occluded`] for each, in one traversal.
+    #[inline]
+    pub fn occluded_packet(&self, pk: &ShadowPacket, active: u32) -> u32 {
+        self.bvh.occluded_packet(pk, active, |i, lanes| {
+            let each = |mut m: u32, hit: &dyn Fn(usize) -> bool| {
+                let mut hits = 0;
+                while m != 0 {
+                    let lane = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    hits |= (hit(lane) as u32) << lane;
+                }
+                hits
+            };
+            // SAFETY: the BVH's leaves name primitives below tris.len() (Scene::build).
+            let [a, b, c] = unsafe { *self.tris.get_unchecked(i) };
+            if a == SPHERE || lanes & (lanes - 1) == 0 {
+                return each(lanes, &|l| self.hit(&pk.ray(l), i, pk.t_max[l]).is_some());
+            }
+            // A triangle and several rays: four at a time, those near an edge one by one.
+            let tri = Triangle::new(
+                self.vertex_fast(a),
+                self.vertex_fast(b),
+                self.vertex_fast(c),
+            );
+            let mut hits = 0;
+            for h in (0..PACKET).step_by(4) {
+                let m = (lanes >> h) & 15;
+                if m == 0 {
+                    continue;
+                }
+                let d = pk.d.map(|x| Vec4::from_slice(&x[h..h + 4]));
+                let t_max = Vec4::from_slice(&pk.t_max[h..h + 4]);
+                let (hit, unsure) = tri.occludes4(pk.o, d, t_max);
+                hits |= (hit & m) << h;
+                hits |= each((unsure & m) << h, &|l| {
+                    tri.intersect(&pk.ray(l), pk.t_max[l]).is_some()
+                });
+            }
+            hits
+        })
     }
 
     /// Bytes held by the geometry the integrators trace: per-primitive indices and

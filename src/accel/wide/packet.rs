@@ -1,0 +1,408 @@
+//! Occlusion of up to sixteen shadow rays from one origin in one traversal of the 4-wide BVH.
+//!
+//! Next-event estimation sends its shadow rays from one shading point to nearby points on
+//! the lights, so the rays of one vertex visit nearly the same nodes. Traced together, each
+//! node is fetched and its loop, stack and branches paid once for all of them, and each
+//! child box is tested against eight rays per 8-lane AVX instruction (rays in lanes, in the
+//! manner of Wald, Slusallek, Benthin and Wagner, "Interactive Rendering with Coherent Ray
+//! Tracing", Eurographics 2001, with a mask of active rays). A ray found occluded leaves the
+//! mask; a subtree is entered only for the rays that enter its box. Before the exact tests a
+//! node's four children are culled against the packet's interval of directions (interval
+//! arithmetic culling, as in Boulos et al., "Packet-based Whitted and Distribution Ray
+//! Tracing", Graphics Interface 2007), see `avx::Coherent`.
+//!
+//! The answers are exactly those of [`WideBvh::occluded`] for each ray on its own: every
+//! box test computes the same IEEE operations on the same operands, in the same order
+//! (`(slab − o) · (1/d)`, the near slab chosen by the sign of `1/d`, the same max/min
+//! operand order), so a ray enters exactly the boxes it enters alone, and tests the same
+//! primitives with the caller's own test. Whether a ray is occluded is a property of the
+//! set of primitives it reaches, not of the order they are visited in. Without AVX (checked
+//! at run time; the binary is built for plain x86-64) each ray is traced on its own.
+
+use super::{WideBvh, EMPTY, LEAF, STACK};
+use crate::geometry::{ray::gamma, Ray};
+use glam::Vec3A;
+
+/// Rays in a packet.
+pub const PACKET: usize = 16;
+
+/// AVX registers (eight lanes each) per packet quantity.
+#[cfg(target_arch = "x86_64")]
+const HALVES: usize = PACKET / 8;
+
+/// Up to sixteen shadow rays that share their origin (sixteen: the ten of the TNCG15
+/// report's Figure 3.3 in one traversal).
+#[derive(Clone, Copy, Debug)]
+pub struct ShadowPacket {
+    pub o: Vec3A,
+    /// The directions, by axis then lane.
+    pub d: [[f32; PACKET]; 3],
+    /// Per lane, the parametric distance up to which the ray must be unobstructed.
+    pub t_max: [f32; PACKET],
+}
+
+impl ShadowPacket {
+    /// Lane `lane` as a ray, bit for bit the one that was stored.
+    #[inline(always)]
+    pub fn ray(&self, lane: usize) -> Ray {
+        Ray::new(
+            self.o,
+            Vec3A::new(self.d[0][lane], self.d[1][lane], self.d[2][lane]),
+        )
+    }
+}
+
+impl WideBvh {
+    /// The lanes of `active` (bit i: lane i) whose rays hit something before their `t_max`.
+    /// `hit(prim, lanes)` tests primitive `prim` against the rays of `lanes` and returns
+    /// those it blocks; each lane's answer must be that of the lane's ray on its own.
+    #[inline]
+    pub fn occluded_packet<F: FnMut(usize, u32) -> u32>(
+        &self,
+        pk: &ShadowPacket,
+        active: u32,
+        mut hit: F,
+    ) -> u32 {
+        debug_assert!(active < 1 << PACKET);
+        if self.root == EMPTY || active == 0 {
+            return 0;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the CPU has AVX, checked just above.
+            return unsafe { avx::occluded(self, pk, active, &mut hit) };
+        }
+        self.occluded_each(pk, active, hit)
+    }
+
+    /// The same answers, each ray by the single-ray traversal: the fallback without AVX, and
+    /// what the tests compare the packet traversal with.
+    pub fn occluded_each<F: FnMut(usize, u32) -> u32>(
+        &self,
+        pk: &ShadowPacket,
+        active: u32,
+        mut hit: F,
+    ) -> u32 {
+        let mut occ = 0;
+        let mut m = active;
+        while m != 0 {
+            let lane = m.trailing_zeros() as usize;
+            m &= m - 1;
+            if self.occluded(&pk.ray(lane), pk.t_max[lane], |p, _| hit(p, 1 << lane) != 0) {
+                occ |= 1 << lane;
+            }
+        }
+        occ
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod avx {
+    use super::*;
+    use std::arch::x86_64::*;
+    use std::mem::MaybeUninit;
+
+    /// What every box test of a packet needs, in registers.
+    struct Lanes {
+        /// 1/d as `Vec3A::recip` computes it (a division, not an approximation).
+        inv: [[__m256; HALVES]; 3],
+        t_max: [__m256; HALVES],
+        /// The origin, splatted for the four children of a node.
+        o: [__m128; 3],
+    }
+
+    /// The packet traversal; see the module's comment for why its answers are the
+    /// single-ray traversal's.
+    #[target_feature(enable = "avx")]
+    pub(super) unsafe fn occluded<F: FnMut(usize, u32) -> u32>(
+        bvh: &WideBvh,
+        pk: &ShadowPacket,
+        active: u32,
+        hit: &mut F,
+    ) -> u32 {
+        let load = |a: &[f32; PACKET]| -> [__m256; HALVES] {
+            std::array::from_fn(|h| _mm256_loadu_ps(a[8 * h..].as_ptr()))
+        };
+        let one = _mm256_set1_ps(1.0);
+        let lanes = Lanes {
+            inv: pk.d.map(|d| load(&d).map(|v| _mm256_div_ps(one, v))),
+            t_max: load(&pk.t_max),
+            o: [pk.o.x, pk.o.y, pk.o.z].map(|x| _mm_set1_ps(x)),
+        };
+        match Coherent::new(&lanes, active) {
+            Some(c) => traverse::<true, F>(bvh, &lanes, &c, active, hit),
+            None => {
+                let c = Coherent::none();
+                traverse::<false, F>(bvh, &lanes, &c, active, hit)
+            }
+        }
+    }
+
+    /// The traversal, for a coherent packet (`COHERENT`: every active lane's 1/d of one sign
+    /// and finite on each axis, see [`Coherent`]) or any other.
+    #[target_feature(enable = "avx")]
+    unsafe fn traverse<const COHERENT: bool, F: FnMut(usize, u32) -> u32>(
+        bvh: &WideBvh,
+        l: &Lanes,
+        coh: &Coherent,
+        active: u32,
+        hit: &mut F,
+    ) -> u32 {
+        let widen = _mm256_set1_ps(1.0 + 2.0 * gamma(3));
+        let zero = _mm256_setzero_ps();
+        let inv = &l.inv;
+        // (node, lanes that entered it); left uninitialised, entries are written before read.
+        let mut stack = [const { MaybeUninit::<(u32, u32)>::uninit() }; STACK];
+        let mut len = 0;
+        let (mut cur, mut mask) = (bvh.root, active);
+        let mut occ = 0u32;
+        loop {
+            if cur & LEAF != 0 {
+                let first = ((cur & !LEAF) >> 4) as usize;
+                for p in first..first + (cur & 15) as usize {
+                    occ |= hit(p, mask);
+                    mask &= !occ;
+                    if mask == 0 {
+                        break;
+                    }
+                }
+                if occ == active {
+                    return occ;
+                }
+            } else {
+                let node = bvh.node(cur);
+                let slab = |s: usize| -> __m128 {
+                    debug_assert!(s < 6);
+                    // SAFETY: slab indices are below 6 (`Coherent::new`, or 0..6 below).
+                    (*node.bounds.get_unchecked(s)).into()
+                };
+                // The slabs relative to the origin, all four children at once: the single-ray
+                // test's `slab − o`, which the origin shared by all lanes lets us share too.
+                // A coherent packet needs only each axis's near and far slab (the same for
+                // all its lanes) and first culls the children no lane enters; any other
+                // needs both slabs and tests every child.
+                let mut rel = [[0f32; 4]; 6];
+                let mut cand = 0b1111;
+                if COHERENT {
+                    let near: [__m128; 3] =
+                        std::array::from_fn(|a| _mm_sub_ps(slab(coh.near[a]), l.o[a]));
+                    let far: [__m128; 3] =
+                        std::array::from_fn(|a| _mm_sub_ps(slab(coh.far[a]), l.o[a]));
+                    cand = coh.children(&near, &far);
+                    for a in 0..3 {
+                        _mm_storeu_ps(rel[2 * a].as_mut_ptr(), near[a]);
+                        _mm_storeu_ps(rel[2 * a + 1].as_mut_ptr(), far[a]);
+                    }
+                } else {
+                    for (s, r) in rel.iter_mut().enumerate() {
+                        _mm_storeu_ps(r.as_mut_ptr(), _mm_sub_ps(slab(s), l.o[s / 2]));
+                    }
+                }
+                let mut next = EMPTY;
+                let mut next_mask = 0;
+                while cand != 0 {
+                    let c = cand.trailing_zeros() as usize;
+                    cand &= cand - 1;
+                    let child = node.child[c];
+                    if child == EMPTY {
+                        continue;
+                    }
+                    // Per axis, the entry and exit distance of each lane: its near and far
+                    // slab times its 1/d. In a coherent packet `rel` holds them already; else
+                    // each lane picks them by the sign of its 1/d (blendv takes the second
+                    // operand where the sign bit is set). Eight lanes at a time, skipping
+                    // eights with no lane in the mask.
+                    let lo: [__m256; 3] = std::array::from_fn(|a| _mm256_set1_ps(rel[2 * a][c]));
+                    let hi: [__m256; 3] =
+                        std::array::from_fn(|a| _mm256_set1_ps(rel[2 * a + 1][c]));
+                    let mut m = 0;
+                    for h in 0..HALVES {
+                        if (mask >> (8 * h)) & 0xff == 0 {
+                            continue;
+                        }
+                        let slabs = |a: usize| {
+                            let inv = inv[a][h];
+                            if COHERENT {
+                                (_mm256_mul_ps(lo[a], inv), _mm256_mul_ps(hi[a], inv))
+                            } else {
+                                (
+                                    _mm256_mul_ps(_mm256_blendv_ps(lo[a], hi[a], inv), inv),
+                                    _mm256_mul_ps(_mm256_blendv_ps(hi[a], lo[a], inv), inv),
+                                )
+                            }
+                        };
+                        let (tn_x, tf_x) = slabs(0);
+                        let (tn_y, tf_y) = slabs(1);
+                        let (tn_z, tf_z) = slabs(2);
+                        // The operand order of `RayBoxes::test` (max/min return the second
+                        // operand when either is NaN).
+                        let tnear =
+                            _mm256_max_ps(_mm256_max_ps(_mm256_max_ps(tn_x, tn_y), tn_z), zero);
+                        let tfar = _mm256_mul_ps(
+                            _mm256_min_ps(
+                                _mm256_min_ps(_mm256_min_ps(tf_x, tf_y), tf_z),
+                                l.t_max[h],
+                            ),
+                            widen,
+                        );
+                        let enter = _mm256_cmp_ps::<_CMP_LE_OQ>(tnear, tfar);
+                        m |= (_mm256_movemask_ps(enter) as u32) << (8 * h);
+                    }
+                    let m = m & mask;
+                    if m == 0 {
+                        continue;
+                    }
+                    if next == EMPTY {
+                        (next, next_mask) = (child, m);
+                    } else {
+                        debug_assert!(len < STACK);
+                        stack.get_unchecked_mut(len).write((child, m));
+                        len += 1;
+                    }
+                }
+                if next != EMPTY {
+                    (cur, mask) = (next, next_mask);
+                    continue;
+                }
+            }
+            // The next entry with a lane not yet known to be occluded.
+            loop {
+                if len == 0 {
+                    return occ;
+                }
+                len -= 1;
+                let (c, m) = stack.get_unchecked(len).assume_init();
+                if m & !occ != 0 {
+                    (cur, mask) = (c, m & !occ);
+                    break;
+                }
+            }
+        }
+    }
+
+    /// A packet whose active lanes have, on each axis, reciprocal directions of one sign and
+    /// finite (most of next-event estimation's: rays from a point to a small light). All its
+    /// lanes then use the same near and far slab per axis, and the packet can be taken as one
+    /// ray with an interval of reciprocal directions per axis, for a test of a node's four
+    /// children at once that rejects those no lane enters (three in four, in the TNCG15
+    /// room) before the exact test of each lane against the others.
+    ///
+    /// That test never rejects a box a lane enters: a rounded product x·(1/d) is monotonic in
+    /// 1/d, so its smallest and largest values over the lanes are those at the smallest and
+    /// largest 1/d; the bounds of the lanes' entry and exit distances so obtained pass
+    /// through the same max/min/widening as each lane's (monotonic too), so a lane with
+    /// entry ≤ exit makes the bounds pass.
+    struct Coherent {
+        near: [usize; 3],
+        far: [usize; 3],
+        /// The smallest and largest 1/d of the active lanes, splatted.
+        lo: [__m128; 3],
+        hi: [__m128; 3],
+        /// The largest `t_max`.
+        t_max: __m128,
+    }
+
+    impl Coherent {
+        fn none() -> Coherent {
+            // SAFETY: SSE is part of x86-64; never read (the general traversal ignores it).
+            let z = unsafe { _mm_setzero_ps() };
+            Coherent {
+                near: [0, 2, 4],
+                far: [1, 3, 5],
+                lo: [z; 3],
+                hi: [z; 3],
+                t_max: z,
+            }
+        }
+
+        #[inline]
+        #[target_feature(enable = "avx")]
+        fn new(l: &Lanes, active: u32) -> Option<Coherent> {
+            // The active lanes as masks, eight at a time: lane l's bit of `active`, tested
+            // in place (the integer bits compare as tiny non-zero floats; AVX1 has no
+            // integer compare).
+            let bits = _mm256_castsi256_ps(_mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128));
+            let on: [__m256; HALVES] = std::array::from_fn(|h| {
+                let word = _mm256_set1_epi32((active >> (8 * h)) as i32);
+                let set = _mm256_and_ps(_mm256_castsi256_ps(word), bits);
+                _mm256_cmp_ps::<_CMP_NEQ_UQ>(set, _mm256_setzero_ps())
+            });
+            let (inf, ninf) = (
+                _mm256_set1_ps(f32::INFINITY),
+                _mm256_set1_ps(f32::NEG_INFINITY),
+            );
+            // The active lanes' minimum (or maximum) of `v`, in all four lanes of the result.
+            let reduce = |v: &[__m256; HALVES], max: bool| {
+                let fill = if max { ninf } else { inf };
+                let f8 = |x, y| {
+                    if max {
+                        _mm256_max_ps(x, y)
+                    } else {
+                        _mm256_min_ps(x, y)
+                    }
+                };
+                let mut w = _mm256_blendv_ps(fill, v[0], on[0]);
+                for h in 1..HALVES {
+                    w = f8(w, _mm256_blendv_ps(fill, v[h], on[h]));
+                }
+                let f = |x, y| {
+                    if max {
+                        _mm_max_ps(x, y)
+                    } else {
+                        _mm_min_ps(x, y)
+                    }
+                };
+                let w = f(_mm256_castps256_ps128(w), _mm256_extractf128_ps::<1>(w));
+                let w = f(w, _mm_shuffle_ps::<0b01_00_11_10>(w, w));
+                f(w, _mm_shuffle_ps::<0b10_11_00_01>(w, w))
+            };
+            let lo = l.inv.map(|v| reduce(&v, false));
+            let hi = l.inv.map(|v| reduce(&v, true));
+            // One sign and finite on every axis: 0 < lo or hi < 0, and both below ∞ in
+            // magnitude (NaN fails every test).
+            let (zero, big) = (_mm_setzero_ps(), _mm_set1_ps(f32::MAX));
+            let abs = |v: __m128| _mm_andnot_ps(_mm_set1_ps(-0.0), v);
+            let mut ok = 0b1111;
+            for a in 0..3 {
+                let sign = _mm_or_ps(_mm_cmplt_ps(zero, lo[a]), _mm_cmplt_ps(hi[a], zero));
+                let finite =
+                    _mm_and_ps(_mm_cmple_ps(abs(lo[a]), big), _mm_cmple_ps(abs(hi[a]), big));
+                ok &= _mm_movemask_ps(_mm_and_ps(sign, finite));
+            }
+            if ok != 0b1111 {
+                return None;
+            }
+            let neg: [usize; 3] = std::array::from_fn(|a| (_mm_cvtss_f32(hi[a]) < 0.0) as usize);
+            Some(Coherent {
+                near: std::array::from_fn(|a| 2 * a + neg[a]),
+                far: std::array::from_fn(|a| 2 * a + 1 - neg[a]),
+                lo,
+                hi,
+                t_max: reduce(&l.t_max, true),
+            })
+        }
+
+        /// Bit c: child c may be entered by some lane (`near`, `far`: the node's near and far
+        /// slabs minus the origin).
+        #[inline]
+        #[target_feature(enable = "avx")]
+        fn children(&self, near: &[__m128; 3], far: &[__m128; 3]) -> u32 {
+            let mut tn = [_mm_setzero_ps(); 3];
+            let mut tf = [_mm_setzero_ps(); 3];
+            for a in 0..3 {
+                let (n, f) = (near[a], far[a]);
+                tn[a] = _mm_min_ps(_mm_mul_ps(n, self.lo[a]), _mm_mul_ps(n, self.hi[a]));
+                tf[a] = _mm_max_ps(_mm_mul_ps(f, self.lo[a]), _mm_mul_ps(f, self.hi[a]));
+            }
+            let tnear = _mm_max_ps(
+                _mm_max_ps(_mm_max_ps(tn[0], tn[1]), tn[2]),
+                _mm_setzero_ps(),
+            );
+            let tfar = _mm_mul_ps(
+                _mm_min_ps(_mm_min_ps(_mm_min_ps(tf[0], tf[1]), tf[2]), self.t_max),
+                _mm_set1_ps(1.0 + 2.0 * gamma(3)),
+            );
+            _mm_movemask_ps(_mm_cmple_ps(tnear, tfar)) as u32
+        }
+    }
+}
