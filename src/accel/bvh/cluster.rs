@@ -8,8 +8,8 @@
 //! The Morton sort is linear (three radix passes over 8-byte keys); the SAH build, O(n log n)
 //! and on large inputs bound by memory traffic (each level reads and rewrites every 32-byte
 //! reference), then sees about 60 % of the references. Measured on the subdivided bunny
-//! (`cargo bench --bench scale`): the tree's SAH cost rises 3 % at 1 M triangles, and four
-//! primitives a cluster, though twice as fast to build, cost 10 % (see docs/performance.md).
+//! (`cargo bench --bench scale`): the tree's SAH cost rises 3 % at 1 M triangles; clusters
+//! of up to four, faster still to build, cost 10 % (see docs/performance.md).
 
 use super::{build_sah, Bvh, PrimRef};
 use crate::geometry::Aabb;
