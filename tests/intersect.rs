@@ -840,22 +840,17 @@ fn check_rays(soup: &Soup, rays: impl Iterator<Item = Ray>, rng: &mut Rng) -> u3
     hits
 }
 
-/// The BVH's closest hit and any-hit agree exactly with brute force over every primitive,
-/// for a few thousand random small triangles and some spheres, with random rays from inside
-/// and outside the cloud, including axis-parallel directions (infinite reciprocals).
-#[test]
-fn bvh_matches_brute_force() {
-    let mut rng = Rng::new(7);
-    let soup = Soup::new(&mut rng, 4000, 50);
-    let rays: Vec<Ray> = (0..4000)
+/// Random rays for a `Soup`: from inside the cloud in random directions, or from outside
+/// towards it; with `axis_parallel`, every tenth along an axis (two positive zero components).
+fn cloud_rays(rng: &mut Rng, n: usize, axis_parallel: bool) -> Vec<Ray> {
+    (0..n)
         .map(|i| {
             let o = if i % 2 == 0 {
                 rng.ball() * 12.0
             } else {
                 rng.dir() * 30.0
             };
-            let d = if i % 10 == 0 {
-                // Axis-parallel: two (positive) zero components.
+            let d = if axis_parallel && i % 10 == 0 {
                 let mut a = [0.0f32; 3];
                 a[(i / 10) % 3] = if rng.f() < 0.5 { 1.0 } else { -1.0 };
                 Vec3A::from_array(a)
@@ -866,7 +861,17 @@ fn bvh_matches_brute_force() {
             };
             Ray::new(o, d)
         })
-        .collect();
+        .collect()
+}
+
+/// The BVH's closest hit and any-hit agree exactly with brute force over every primitive,
+/// for a few thousand random small triangles and some spheres, with random rays from inside
+/// and outside the cloud, including axis-parallel directions (infinite reciprocals).
+#[test]
+fn bvh_matches_brute_force() {
+    let mut rng = Rng::new(7);
+    let soup = Soup::new(&mut rng, 4000, 50);
+    let rays = cloud_rays(&mut rng, 4000, true);
     let hits = check_rays(&soup, rays.into_iter(), &mut rng);
     // The test must exercise both outcomes.
     eprintln!("BVH: {hits} of 4000 rays hit");
@@ -879,21 +884,7 @@ fn bvh_matches_brute_force() {
 fn clustered_bvh_matches_brute_force() {
     let mut rng = Rng::new(11);
     let soup = Soup::new(&mut rng, mcrt::accel::bvh::CLUSTER_MIN as u32 + 500, 30);
-    let rays: Vec<Ray> = (0..1500)
-        .map(|i| {
-            let o = if i % 2 == 0 {
-                rng.ball() * 12.0
-            } else {
-                rng.dir() * 30.0
-            };
-            let d = if i % 2 == 0 {
-                rng.dir()
-            } else {
-                (rng.ball() * 8.0 - o).normalize()
-            };
-            Ray::new(o, d)
-        })
-        .collect();
+    let rays = cloud_rays(&mut rng, 1500, false);
     let hits = check_rays(&soup, rays.into_iter(), &mut rng);
     assert!(hits > 150 && hits < 1350, "{hits} hits");
 }
