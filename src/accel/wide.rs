@@ -161,6 +161,10 @@ impl WideBvh {
     /// returns its distance if nearer than `t_max`; the caller keeps whatever else it needs.
     /// The closure is monomorphised, so the caller's primitive enum is matched inline, with
     /// no dynamic dispatch per ray.
+    ///
+    /// Children are visited nearest entry first, and the stack keeps each postponed child's
+    /// entry distance: one popped after a hit nearer than its box is dropped unopened, so a
+    /// wall behind the hit costs no node or triangle tests (Wald et al. 2008 do the same).
     #[inline]
     pub fn intersect<F: FnMut(usize, f32) -> Option<f32>>(
         &self,
@@ -168,13 +172,17 @@ impl WideBvh {
         mut t_max: f32,
         mut hit: F,
     ) -> bool {
+        if self.root == EMPTY {
+            return false;
+        }
         let r = RayBoxes::new(ray);
-        let mut stack = Stack::new();
+        let mut stack = Stack::<(u32, f32)>::new();
         let mut cur = self.root;
         let mut found = false;
         loop {
-            if cur == EMPTY {
-            } else if cur & LEAF != 0 {
+            // Empty child slots have empty boxes and are never entered, so only the root can
+            // be EMPTY, and it was checked above.
+            if cur & LEAF != 0 {
                 let first = ((cur & !LEAF) >> 4) as usize;
                 for p in first..first + (cur & 15) as usize {
                     if let Some(t) = hit(p, t_max) {
@@ -184,24 +192,35 @@ impl WideBvh {
                 }
             } else {
                 let node = self.node(cur);
-                let (mask, tnear) = r.test(node, t_max);
+                let (mut mask, tnear) = r.test(node, t_max);
                 if mask != 0 {
-                    // Push the hit children farthest first, so the nearest is visited next.
-                    let mut order = [(0f32, 0u32); 4];
-                    let mut n = 0;
                     let t = tnear.to_array();
-                    let mut m = mask;
-                    while m != 0 {
-                        let s = m.trailing_zeros() as usize;
-                        m &= m - 1;
+                    let a = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if mask == 0 {
+                        cur = node.child[a];
+                        continue;
+                    }
+                    let b = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if mask == 0 {
+                        // Two children, the commonest case: the nearer next, the other kept.
+                        let (near, far) = if t[a] <= t[b] { (a, b) } else { (b, a) };
+                        stack.push((node.child[far], t[far]));
+                        cur = node.child[near];
+                        continue;
+                    }
+                    // Three or four: sorted by entry distance, farthest pushed first.
+                    let mut order = [(0f32, 0u32); 4];
+                    order[0] = (t[a], node.child[a]);
+                    order[1] = (t[b], node.child[b]);
+                    let mut n = 2;
+                    while mask != 0 {
+                        let s = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
                         order[n] = (t[s], node.child[s]);
                         n += 1;
                     }
-                    if n == 1 {
-                        cur = order[0].1;
-                        continue;
-                    }
-                    // Insertion sort of at most four entries, farthest first.
                     for i in 1..n {
                         let mut j = i;
                         while j > 0 && order[j - 1].0 < order[j].0 {
@@ -209,16 +228,25 @@ impl WideBvh {
                             j -= 1;
                         }
                     }
-                    for &(_, c) in &order[..n - 1] {
-                        stack.push(c);
+                    for &(tc, c) in &order[..n - 1] {
+                        stack.push((c, tc));
                     }
                     cur = order[n - 1].1;
                     continue;
                 }
             }
-            match stack.pop() {
-                Some(c) => cur = c,
-                None => return found,
+            // The next postponed child whose box the ray still enters before the nearest
+            // hit (widened as `RayBoxes::test` widens it, so no box the test would enter is
+            // dropped).
+            loop {
+                match stack.pop() {
+                    Some((c, tc)) if tc <= t_max * WIDEN => {
+                        cur = c;
+                        break;
+                    }
+                    Some(_) => {}
+                    None => return found,
+                }
             }
         }
     }
@@ -236,7 +264,7 @@ impl WideBvh {
             return false;
         }
         let r = RayBoxes::new(ray);
-        let mut stack = Stack::new();
+        let mut stack = Stack::<u32>::new();
         let mut cur = self.root;
         loop {
             // Empty child slots have empty boxes and are never entered, so only the root can
@@ -385,6 +413,9 @@ impl Collapse<'_> {
     }
 }
 
+/// The factor by which a box's exit distance is widened: 1 + 2γ(3) (see `RayBoxes::test`).
+const WIDEN: f32 = 1.0 + 2.0 * gamma(3);
+
 /// A ray prepared for 4-wide slab tests: the origin and inverse direction splatted, and per
 /// axis the index of the near slab in `Node4::bounds` (so no per-box min/max of the two slab
 /// distances is needed).
@@ -433,27 +464,28 @@ impl RayBoxes {
         let tf_y = (slab(self.far[1]) - self.o[1]) * self.inv[1];
         let tf_z = (slab(self.far[2]) - self.o[2]) * self.inv[2];
         let tnear = tn_x.max(tn_y).max(tn_z).max(Vec4::ZERO);
-        let tfar = tf_x.min(tf_y).min(tf_z).min(Vec4::splat(t_max)) * (1.0 + 2.0 * gamma(3));
+        let tfar = tf_x.min(tf_y).min(tf_z).min(Vec4::splat(t_max)) * WIDEN;
         (tnear.cmple(tfar).bitmask(), tnear)
     }
 }
 
-/// The traversal stack. The binary tree is at most `bvh::MAX_DEPTH` deep, so a wide node
-/// path is too, and each level leaves at most three siblings behind: 3 × MAX_DEPTH entries
-/// suffice. Left uninitialised: zeroing it cost 4 % of all instructions per ray.
-struct Stack {
-    items: [std::mem::MaybeUninit<u32>; STACK],
+/// The traversal stack (of child references, with their entry distances for the closest
+/// hit). The binary tree is at most `bvh::MAX_DEPTH` deep, so a wide node path is too, and
+/// each level leaves at most three siblings behind: 3 × MAX_DEPTH entries suffice. Left
+/// uninitialised: zeroing it cost 4 % of all instructions per ray.
+struct Stack<T: Copy> {
+    items: [std::mem::MaybeUninit<T>; STACK],
     len: usize,
 }
 
 const STACK: usize = 3 * super::bvh::MAX_DEPTH;
 
-impl Stack {
+impl<T: Copy> Stack<T> {
     #[inline(always)]
     fn new() -> Self {
         // Built in place from an uninitialised whole: initialising `len` as a field next to
         // the uninitialised items let LLVM merge both into one memset of the whole stack.
-        let mut s = std::mem::MaybeUninit::<Stack>::uninit();
+        let mut s = std::mem::MaybeUninit::<Stack<T>>::uninit();
         // SAFETY: `len` is written before use; the items are MaybeUninit and need nothing.
         unsafe {
             std::ptr::addr_of_mut!((*s.as_mut_ptr()).len).write(0);
@@ -461,12 +493,12 @@ impl Stack {
         }
     }
     #[inline(always)]
-    fn push(&mut self, v: u32) {
+    fn push(&mut self, v: T) {
         self.items[self.len] = std::mem::MaybeUninit::new(v);
         self.len += 1;
     }
     #[inline(always)]
-    fn pop(&mut self) -> Option<u32> {
+    fn pop(&mut self) -> Option<T> {
         if self.len == 0 {
             return None;
         }
