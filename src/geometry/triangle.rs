@@ -18,6 +18,34 @@ pub struct Triangle {
 /// Barycentric coordinates closer than this to an edge are recomputed in f64.
 const EDGE_EPS: f32 = 1e-4;
 
+/// The x + y + z sums of four products: lane i is (a_i.x + a_i.y) + a_i.z, the order of
+/// glam's `Vec3A::dot`, so each equals the dot product it replaces bit for bit. A 4×4
+/// transpose and two additions instead of four horizontal sums (the fourth lanes, whatever
+/// they hold, are never added).
+#[inline(always)]
+fn dot4(a: [Vec3A; 4]) -> [f32; 4] {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::*;
+        let [a0, a1, a2, a3]: [__m128; 4] = a.map(Into::into);
+        // SAFETY: SSE is part of x86-64.
+        unsafe {
+            let t0 = _mm_unpacklo_ps(a0, a1); // x0 x1 y0 y1
+            let t1 = _mm_unpacklo_ps(a2, a3); // x2 x3 y2 y3
+            let t2 = _mm_unpackhi_ps(a0, a1); // z0 z1 w0 w1
+            let t3 = _mm_unpackhi_ps(a2, a3); // z2 z3 w2 w3
+            let x = _mm_movelh_ps(t0, t1);
+            let y = _mm_movehl_ps(t1, t0);
+            let z = _mm_movelh_ps(t2, t3);
+            Vec4::from(_mm_add_ps(_mm_add_ps(x, y), z)).to_array()
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        a.map(|v| (v.x + v.y) + v.z)
+    }
+}
+
 impl Triangle {
     pub fn new(p0: Vec3A, p1: Vec3A, p2: Vec3A) -> Self {
         Triangle { p0, p1, p2 }
@@ -40,17 +68,20 @@ impl Triangle {
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<(f32, f32, f32)> {
         let e1 = self.p1 - self.p0;
         let e2 = self.p2 - self.p0;
-        let p = ray.d.cross(e2);
-        let det = e1.dot(p);
-        let inv_det = 1.0 / det;
         let s = ray.o - self.p0;
-        let u = s.dot(p) * inv_det;
+        let p = ray.d.cross(e2);
         let q = s.cross(e1);
-        let v = ray.d.dot(q) * inv_det;
+        // det = e1·p, and u, v and t times det: four dot products in one transposed sum.
+        let [det, u_det, v_det, t_det] = dot4([e1 * p, s * p, ray.d * q, e2 * q]);
+        let inv_det = 1.0 / det;
+        let u = u_det * inv_det;
+        let v = v_det * inv_det;
+        let w = 1.0 - u - v;
         // The fast path decides clear hits and misses; anything near an edge (or a ray nearly
-        // in the triangle's plane, where inv_det is huge or infinite) goes to f64.
-        if u.min(v).min(1.0 - u - v) > EDGE_EPS {
-            let t = e2.dot(q) * inv_det;
+        // in the triangle's plane, where inv_det is huge or infinite and u or v may be NaN)
+        // goes to f64.
+        if u > EDGE_EPS && v > EDGE_EPS && w > EDGE_EPS {
+            let t = t_det * inv_det;
             return (t > 0.0 && t < t_max).then_some((t, u, v));
         }
         if u < -EDGE_EPS || v < -EDGE_EPS || u + v > 1.0 + EDGE_EPS {
@@ -62,8 +93,8 @@ impl Triangle {
     /// [`Triangle::intersect`]'s fast path for four rays from one origin `o` (directions
     /// `d` by axis, a lane per ray): the lanes it finds hit before their `t_max`, and the
     /// lanes near an edge that it leaves to `intersect` (whose f64 test decides them). The
-    /// same IEEE operations in the same order as `intersect` (glam's cross product and dot
-    /// product, `f32::min`'s way with NaN), so every other lane gets `intersect`'s answer;
+    /// same IEEE operations in the same order as `intersect` (glam's cross product, dot
+    /// products summed as (x + y) + z), so every other lane gets `intersect`'s answer;
     /// what the rays share (s = o − p0, q = s × e1, e2 · q) is computed once.
     #[inline(always)]
     pub fn occludes4(&self, o: Vec3A, d: [Vec4; 3], t_max: Vec4) -> (u32, u32) {
@@ -85,12 +116,9 @@ impl Triangle {
         let u = dot(&s, &p) * inv_det;
         let v = dot(&d, &q) * inv_det;
         let w = Vec4::ONE - u - v;
-        // min(min(u, v), w) > ε, where f32::min ignores a NaN operand: every value that is
-        // not NaN exceeds ε, and not all three are NaN.
+        // u, v and w > ε (false for NaN, as in `intersect`).
         let eps = Vec4::splat(EDGE_EPS);
-        let nan = |x: Vec4| x.cmpne(x);
-        let above = |x: Vec4| !x.cmple(eps); // true for NaN
-        let clear = above(u) & above(v) & above(w) & !(nan(u) & nan(v) & nan(w));
+        let clear = u.cmpgt(eps) & v.cmpgt(eps) & w.cmpgt(eps);
         let t = t_num * inv_det;
         let hit = clear & t.cmpgt(Vec4::ZERO) & t.cmplt(t_max);
         let out = u.cmplt(-eps) | v.cmplt(-eps) | (u + v).cmpgt(Vec4::splat(1.0 + EDGE_EPS));

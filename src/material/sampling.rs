@@ -1,7 +1,7 @@
 //! Warping uniform numbers onto directions.
 
 use glam::{Vec2, Vec3A};
-use std::f32::consts::{FRAC_1_PI, FRAC_PI_2, FRAC_PI_4};
+use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
 
 /// Concentric map of the square onto the unit disk (Shirley and Chiu, "A Low Distortion Map
 /// Between Disk and Square", JGT 2(3), 1997).
@@ -11,13 +11,27 @@ pub fn square_to_disk_concentric(u: Vec2) -> Vec2 {
     if o.x == 0.0 && o.y == 0.0 {
         return Vec2::ZERO;
     }
-    let (r, theta) = if o.x.abs() > o.y.abs() {
-        (o.x, FRAC_PI_4 * (o.y / o.x))
+    // θ = φ in the wedges around ±x and θ = π/2 − φ in those around ±y, with φ within
+    // ±π/4 either way: sin and cos of φ (swapped for the second) by polynomials.
+    if o.x.abs() > o.y.abs() {
+        let (s, c) = sin_cos_quarter(FRAC_PI_4 * (o.y / o.x));
+        Vec2::new(o.x * c, o.x * s)
     } else {
-        (o.y, FRAC_PI_2 - FRAC_PI_4 * (o.x / o.y))
-    };
-    let (s, c) = theta.sin_cos();
-    Vec2::new(r * c, r * s)
+        let (s, c) = sin_cos_quarter(FRAC_PI_4 * (o.x / o.y));
+        Vec2::new(o.y * s, o.y * c)
+    }
+}
+
+/// sin x and cos x for |x| ≤ π/4, within about an ulp: the minimax polynomials of Cephes'
+/// `sinf` and `cosf` (Moshier, *Methods and Programs for Mathematical Functions*, 1989) for
+/// that interval, without the argument reduction a library call pays for. The concentric map
+/// calls it once a diffuse bounce, where libm's `sincosf` cost 3 % of a Cornell box render.
+#[inline(always)]
+pub fn sin_cos_quarter(x: f32) -> (f32, f32) {
+    let z = x * x;
+    let s = ((-1.951_529_6e-4 * z + 8.332_161e-3) * z - 1.666_665_5e-1) * z * x + x;
+    let c = (((2.443_315_7e-5 * z - 1.388_731_6e-3) * z + 4.166_664_6e-2) * z * z - 0.5 * z) + 1.0;
+    (s, c)
 }
 
 /// Cosine-weighted hemisphere around +z (Malley's method): pdf = cos θ / π.
@@ -54,5 +68,52 @@ pub fn power_heuristic(f: f32, g: f32) -> f32 {
         0.0
     } else {
         f2 / (f2 + g2)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The polynomials against f64 sin and cos over the whole interval, densely: within
+    /// 1.5 ulp of 1 (the largest value) everywhere.
+    #[test]
+    fn sin_cos_quarter_is_accurate() {
+        let n = 100_000;
+        let mut worst = 0.0f64;
+        for i in 0..=n {
+            let x =
+                (-FRAC_PI_4 + 2.0 * FRAC_PI_4 * i as f32 / n as f32).clamp(-FRAC_PI_4, FRAC_PI_4);
+            let (s, c) = sin_cos_quarter(x);
+            let xd = x as f64;
+            worst = worst
+                .max((s as f64 - xd.sin()).abs())
+                .max((c as f64 - xd.cos()).abs());
+        }
+        assert!(worst < 1.5 * f32::EPSILON as f64, "worst error {worst:e}");
+    }
+
+    /// The concentric map: the disk point has the radius and angle Shirley and Chiu's formula
+    /// gives (evaluated in f64), for points of every wedge.
+    #[test]
+    fn concentric_map_matches_the_formula() {
+        let mut rng = crate::sampler::Sampler::from_state(7, 1);
+        for _ in 0..10_000 {
+            let u = rng.next_2d();
+            let d = square_to_disk_concentric(u);
+            let (x, y) = (2.0 * u.x as f64 - 1.0, 2.0 * u.y as f64 - 1.0);
+            let (r, t) = if x.abs() > y.abs() {
+                (x, std::f64::consts::FRAC_PI_4 * (y / x))
+            } else {
+                (
+                    y,
+                    std::f64::consts::FRAC_PI_2 - std::f64::consts::FRAC_PI_4 * (x / y),
+                )
+            };
+            let e = (d.x as f64 - r * t.cos())
+                .abs()
+                .max((d.y as f64 - r * t.sin()).abs());
+            assert!(e < 4.0 * f32::EPSILON as f64, "{u:?}: {d:?} off by {e:e}");
+        }
     }
 }
