@@ -41,7 +41,14 @@ impl Scene {
                         positions.len() + mesh.positions.len() < SPHERE as usize,
                         "too many vertices"
                     );
-                    if mesh.normals.is_some() || mesh.uvs.is_some() {
+                    // Texture coordinates matter only under a texture: without one the hit
+                    // skips the search for its mesh's attributes (which cost a ray in the
+                    // Cornell box, whose quads all have them, 45 instructions).
+                    let textured = desc
+                        .materials
+                        .get(shape.material as usize)
+                        .is_some_and(|mat| mat.texture.is_some());
+                    if mesh.normals.is_some() || (mesh.uvs.is_some() && textured) {
                         m |= META_ATTRS;
                         attrs.push(MeshAttrs {
                             first_vertex: base,
@@ -49,10 +56,14 @@ impl Scene {
                                 normals.extend_from_slice(ns);
                                 (normals.len() - ns.len()) as u32
                             }),
-                            uvs: mesh.uvs.as_ref().map_or(u32::MAX, |ts| {
-                                uvs.extend_from_slice(ts);
-                                (uvs.len() - ts.len()) as u32
-                            }),
+                            uvs: mesh
+                                .uvs
+                                .as_ref()
+                                .filter(|_| textured)
+                                .map_or(u32::MAX, |ts| {
+                                    uvs.extend_from_slice(ts);
+                                    (uvs.len() - ts.len()) as u32
+                                }),
                         });
                     }
                     let vertex = |i: u32| Vec3A::from(mesh.positions[i as usize]);

@@ -30,7 +30,8 @@ pub const NO_LIGHT: u32 = u32::MAX;
 pub const SPHERE: u32 = u32::MAX;
 /// `Scene::meta` flags: the primitive emits (its light is in `Scene::emitters`)...
 pub const META_EMITTER: u32 = 1 << 31;
-/// ...its mesh has vertex normals or texture coordinates (in `Scene::attrs`).
+/// ...its mesh has vertex normals, or texture coordinates and a textured material (in
+/// `Scene::attrs`).
 pub const META_ATTRS: u32 = 1 << 30;
 /// The material index is what remains.
 pub const META_MATERIAL: u32 = (1 << 30) - 1;
@@ -57,8 +58,9 @@ pub struct Interaction {
     /// Unit shading normal, on the same side as `ng`.
     pub ns: Vec3A,
     pub t: f32,
-    /// Texture coordinates: the mesh's, interpolated; barycentric (b1, b2) on a mesh without
-    /// them; (φ/2π, θ/π) on a sphere (Mitsuba's conventions).
+    /// Texture coordinates: the mesh's, interpolated, under a texture; barycentric (b1, b2)
+    /// on a mesh without them or without a texture to read them; (φ/2π, θ/π) on a sphere
+    /// (Mitsuba's conventions).
     pub uv: Vec2,
     pub material: u32,
     pub light: u32,
