@@ -22,7 +22,7 @@
 
 use crate::accel::{ShadowPacket, PACKET};
 use crate::geometry::ray::{offset_ray_origin, SHADOW_EPSILON};
-use crate::geometry::{Frame, Ray};
+use crate::geometry::{sqrt4, Frame, Ray};
 use crate::light::PlanarLight;
 use crate::material::sampling::power_heuristic;
 use crate::material::{Bsdf, Material};
@@ -245,21 +245,6 @@ const fn bit(b: usize, l: usize) -> f32 {
 #[inline(always)]
 fn wrap(x: Vec4) -> Vec4 {
     Vec4::select(x.cmpge(Vec4::ONE), x - Vec4::ONE, x)
-}
-
-/// The square root of each lane (glam's `Vec4` has none): one SSE instruction on x86-64,
-/// the same correctly rounded values elsewhere.
-#[inline(always)]
-fn sqrt4(x: Vec4) -> Vec4 {
-    #[cfg(target_arch = "x86_64")]
-    {
-        // SAFETY: SSE is part of x86-64.
-        Vec4::from(unsafe { std::arch::x86_64::_mm_sqrt_ps(x.into()) })
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        x.map(f32::sqrt)
-    }
 }
 
 /// One light, planar: the batch four lanes at a time (glam's `Vec4`: SSE2 on x86-64). Each

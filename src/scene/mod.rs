@@ -287,23 +287,37 @@ impl Scene {
             };
             // SAFETY: the BVH's leaves name primitives below tris.len() (Scene::build).
             let [a, b, c] = unsafe { *self.tris.get_unchecked(i) };
-            if a == SPHERE || lanes & (lanes - 1) == 0 {
+            if lanes & (lanes - 1) == 0 {
                 return each(lanes, &|l| self.hit(&pk.ray(l), i, pk.t_max[l]).is_some());
             }
-            // A triangle and several rays: four at a time, those near an edge one by one.
+            // Several rays: four at a time (for a triangle, those near an edge one by one).
+            let four = |h: usize| {
+                let d = pk.d.map(|x| Vec4::from_slice(&x[h..h + 4]));
+                (d, Vec4::from_slice(&pk.t_max[h..h + 4]))
+            };
+            let mut hits = 0;
+            if a == SPHERE {
+                let sphere = &self.spheres[b as usize];
+                for h in (0..PACKET).step_by(4) {
+                    let m = (lanes >> h) & 15;
+                    if m != 0 {
+                        let (d, t_max) = four(h);
+                        hits |= (sphere.occludes4(pk.o, d, t_max) & m) << h;
+                    }
+                }
+                return hits;
+            }
             let tri = Triangle::new(
                 self.vertex_fast(a),
                 self.vertex_fast(b),
                 self.vertex_fast(c),
             );
-            let mut hits = 0;
             for h in (0..PACKET).step_by(4) {
                 let m = (lanes >> h) & 15;
                 if m == 0 {
                     continue;
                 }
-                let d = pk.d.map(|x| Vec4::from_slice(&x[h..h + 4]));
-                let t_max = Vec4::from_slice(&pk.t_max[h..h + 4]);
+                let (d, t_max) = four(h);
                 let (hit, unsure) = tri.occludes4(pk.o, d, t_max);
                 hits |= (hit & m) << h;
                 hits |= each((unsure & m) << h, &|l| {
