@@ -292,7 +292,8 @@ impl Scene {
             }
             // Several rays: four at a time (for a triangle, those near an edge one by one).
             let four = |h: usize| {
-                let d = pk.d.map(|x| Vec4::from_slice(&x[h..h + 4]));
+                // (Loaded in place: `pk.d.map` would copy the whole arrays first.)
+                let d = std::array::from_fn(|k| Vec4::from_slice(&pk.d[k][h..h + 4]));
                 (d, Vec4::from_slice(&pk.t_max[h..h + 4]))
             };
             let mut hits = 0;
