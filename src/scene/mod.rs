@@ -59,8 +59,8 @@ pub struct Interaction {
     pub ns: Vec3A,
     pub t: f32,
     /// Texture coordinates: the mesh's, interpolated, under a texture; barycentric (b1, b2)
-    /// on a mesh without them or without a texture to read them; (φ/2π, θ/π) on a sphere
-    /// (Mitsuba's conventions).
+    /// on a mesh without them or without a texture to read them; (φ/2π, θ/π) on a textured
+    /// sphere (Mitsuba's conventions), zero on others.
     pub uv: Vec2,
     pub material: u32,
     pub light: u32,
@@ -228,16 +228,21 @@ impl Scene {
         } else {
             let s = &self.spheres[idx[1] as usize];
             let (p, n, p_err) = s.surface_point(ray.at(t_hit));
-            let phi = n.y.atan2(n.x);
-            let phi = if phi < 0.0 {
-                phi + std::f32::consts::TAU
+            // The angles only where a texture reads them (an arctangent and an arccosine).
+            let uv = if self.materials[material as usize].texture.is_some() {
+                let phi = n.y.atan2(n.x);
+                let phi = if phi < 0.0 {
+                    phi + std::f32::consts::TAU
+                } else {
+                    phi
+                };
+                Vec2::new(
+                    phi / std::f32::consts::TAU,
+                    n.z.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
+                )
             } else {
-                phi
+                Vec2::ZERO
             };
-            let uv = Vec2::new(
-                phi / std::f32::consts::TAU,
-                n.z.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
-            );
             Interaction {
                 p,
                 p_err,
