@@ -29,7 +29,7 @@ use crate::material::{Bsdf, Material};
 use crate::scene::{Interaction, Scene};
 use crate::Color;
 use glam::{Vec3A, Vec4};
-use std::f32::consts::FRAC_1_PI;
+use std::f32::consts::{FRAC_1_PI, PI};
 use std::mem::MaybeUninit;
 
 use super::RayStats;
@@ -318,30 +318,36 @@ fn planar<const LAMBERT: bool>(
             let q: [Vec4; 3] = std::array::from_fn(|x| a[x] * w0 + b[x] * w1 + c[x] * w2);
             let d: [Vec4; 3] = std::array::from_fn(|x| q[x] - ps[x]);
             let dist2 = dot(&d, &d);
-            // One division per lane for the direction and one for the weight: the divider,
-            // not the arithmetic, bounds this loop (divisions and square roots issue one
-            // every few cycles), so the pdf is carried as its reciprocal x = 1/p_light =
-            // cos_l·A/r², which needs none.
-            let inv_r = Vec4::ONE / sqrt4(dist2);
-            let w: [Vec4; 3] = std::array::from_fn(|x| d[x] * inv_r);
-            let cos_l = -dot(&nl, &w);
-            let x_l = cos_l * area * (inv_r * inv_r);
-            let cos = dot(&ns, &w);
             let under = dot(&ng, &d).cmplt(Vec4::ZERO);
-            let mut good =
-                jv.cmplt(Vec4::splat(nf)) & dist2.cmpgt(Vec4::ZERO) & cos_l.cmpgt(Vec4::ZERO);
+            let mut good = jv.cmplt(Vec4::splat(nf)) & dist2.cmpgt(Vec4::ZERO);
+            // The divider, not the arithmetic, bounds this loop (divisions and square roots
+            // issue one every few cycles and wait a dozen), so each lane pays as few as it can.
             if LAMBERT {
-                // f·|cos| = (ρ/π)·c and p_bsdf = c/π, with c the cosine on the lit side; ρ/π is
-                // applied to the sum. The power heuristic's weight over p_light,
-                // c·(n·p)²/((n·p)² + p_bsdf²)/p, is with p = 1/x c·n²·x/(n² + (p_bsdf·x)²):
-                // finite, and 0 where x is (a light seen edge-on), as the limit is.
-                let c = cos * side;
-                good &= c.cmpgt(Vec4::ZERO);
-                let g = (c * FRAC_1_PI) * x_l;
-                let n2 = Vec4::splat(nf * nf);
-                weight[h] = (c * n2 * x_l) / (n2 + g * g);
+                // f·|cos| = (ρ/π)·c and p_bsdf = c/π, with c the cosine on the lit side (ρ/π
+                // is applied to the sum), and p_light = r²/(cos_l·A). The power heuristic's
+                // weight over p_light, c·(n·p_light)²/((n·p_light)² + p_bsdf²)/p_light, is
+                // n²π²·t/(n²π² + t²) with t = c·cos_l·A/r² = (c·r)(cos_l·A·r)/(r²)²: no square
+                // root, one division for 1/r² and one for the weight; finite, and 0 where t is
+                // (a light seen edge-on), as the limit is.
+                let a_l = -dot(&nl, &d) * area; // cos_l·A·r
+                let a_s = dot(&ns, &d) * side; // c·r
+                good &= a_l.cmpgt(Vec4::ZERO) & a_s.cmpgt(Vec4::ZERO);
+                let inv = Vec4::ONE / dist2;
+                let t = (a_l * a_s) * (inv * inv);
+                let k = Vec4::splat(nf * nf * PI * PI);
+                weight[h] = (k * t) / (k + t * t);
             } else {
+                // The pdf is carried as its reciprocal x = 1/p_light = cos_l·A/r².
+                let inv_r = Vec4::ONE / sqrt4(dist2);
+                let w: [Vec4; 3] = std::array::from_fn(|x| d[x] * inv_r);
+                let cos_l = -dot(&nl, &w);
+                let x_l = cos_l * area * (inv_r * inv_r);
+                good &= cos_l.cmpgt(Vec4::ZERO);
                 (Vec4::ONE / x_l).write_to_slice(&mut pdf[4 * h..]);
+                dot(&ns, &w).write_to_slice(&mut cos_s[4 * h..]);
+                for x in 0..3 {
+                    w[x].write_to_slice(&mut wi[x][4 * h..]);
+                }
             }
             // The ray: from the origin on its side to the point pushed off the light towards
             // it (`offset_ray_origin` at both ends).
@@ -351,9 +357,7 @@ fn planar<const LAMBERT: bool>(
             for x in 0..3 {
                 let target = Vec4::select(towards, q[x] - off[x], q[x] + off[x]);
                 (target - o[x]).write_to_slice(&mut pk.d[x][4 * h..]);
-                w[x].write_to_slice(&mut wi[x][4 * h..]);
             }
-            cos.write_to_slice(&mut cos_s[4 * h..]);
             ok |= good.bitmask() << (4 * h);
             below |= under.bitmask() << (4 * h);
         }
