@@ -247,9 +247,11 @@ fn wrap(x: Vec4) -> Vec4 {
     Vec4::select(x.cmpge(Vec4::ONE), x - Vec4::ONE, x)
 }
 
-/// One light, planar: the batch four lanes at a time (glam's `Vec4`: SSE2 on x86-64). Each
-/// expression is the one of the general path (`AreaLight::sample_point`, `Lights::sample`,
-/// `Interaction::spawn_ray_to`, the power heuristic), so the estimator is the same.
+/// One light, planar: the batch four lanes at a time (glam's `Vec4`: SSE2 on x86-64). The
+/// estimator is the general path's (`AreaLight::sample_point`, `Lights::sample`,
+/// `Interaction::spawn_ray_to`, the power heuristic): the same points, rays and weights, the
+/// weights' algebra rearranged to spare the divider (see the comments below), so the values
+/// agree to rounding, not bit for bit.
 #[inline(never)]
 #[allow(clippy::too_many_arguments)]
 fn planar<const LAMBERT: bool>(
