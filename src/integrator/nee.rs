@@ -76,7 +76,7 @@ pub(crate) fn sample_lights(
             // variant, without the arrays the others need); the others are evaluated sample
             // by sample.
             let planar = match &material.bsdf {
-                Bsdf::Lambert(_) => match material_side(material, wo) {
+                Bsdf::Lambert(_) => match material.orient(wo) {
                     Some(_) => planar::<true>,
                     None => return Color::ZERO, // a one-sided surface seen from behind
                 },
@@ -99,33 +99,49 @@ fn one_sample(
     frame: &Frame,
     wo: Vec3A,
     material: &Material,
-    [ux, uy, u_sel]: [f32; 3],
+    delta: [f32; 3],
     stats: &mut RayStats,
 ) -> Color {
-    let Some(ls) = scene.lights.sample(si.p, u_sel, glam::Vec2::new(ux, uy)) else {
+    let Some((ray, t_max, contribution)) = light_sample(scene, si, frame, wo, material, 1, delta)
+    else {
         return Color::ZERO;
     };
+    stats.shadow_rays += 1;
+    if scene.occluded(&ray, t_max) {
+        Color::ZERO
+    } else {
+        contribution
+    }
+}
+
+/// Light sample `u` (two numbers for the point, one for the light) of `n` at `si`: its
+/// shadow ray, the distance the ray must be clear to, and its contribution if it is (the
+/// BSDF value and cosine times the emitted radiance, weighted by MIS against BSDF sampling,
+/// over the light pdf); None where it contributes nothing whatever the shadow ray finds.
+#[inline(always)]
+fn light_sample(
+    scene: &Scene,
+    si: &Interaction,
+    frame: &Frame,
+    wo: Vec3A,
+    material: &Material,
+    n: u32,
+    [ux, uy, u_sel]: [f32; 3],
+) -> Option<(Ray, f32, Color)> {
+    let ls = scene.lights.sample(si.p, u_sel, glam::Vec2::new(ux, uy))?;
     let wi = frame.to_local(ls.wi);
     let (f, bsdf_pdf) = material.eval_pdf(wo, wi);
     let f = f * wi.z.abs();
     if f == Color::ZERO {
-        return Color::ZERO;
+        return None;
     }
-    let (ray, t_max) = if ls.infinite {
-        (si.spawn_ray(ls.wi), f32::INFINITY)
-    } else {
-        si.spawn_ray_to(ls.p, ls.p_err, ls.n)
-    };
-    stats.shadow_rays += 1;
-    if scene.occluded(&ray, t_max) {
-        return Color::ZERO;
-    }
+    let (ray, t_max) = si.spawn_ray_to_light(&ls);
     let w = if ls.delta {
         1.0
     } else {
-        power_heuristic(ls.pdf, bsdf_pdf)
+        power_heuristic(n as f32 * ls.pdf, bsdf_pdf)
     };
-    f * ls.le * (w / ls.pdf)
+    Some((ray, t_max, f * ls.le * (w / ls.pdf)))
 }
 
 /// Any lights: each sample by `Lights::sample` and `Material::eval_pdf`, in batches (first
@@ -153,32 +169,16 @@ fn any_lights(
         let m = (n - i).min(BATCH as u32);
         let mut k = 0;
         for j in i..i + m {
-            let [ux, uy, u_sel] = if j == 0 {
+            let u = if j == 0 {
                 delta
             } else {
                 let g = [j.wrapping_mul(step), j.wrapping_mul(G1), j.wrapping_mul(G2)];
                 std::array::from_fn(|d| unit(fixed_delta[d].wrapping_add(g[d])))
             };
-            let Some(ls) = scene.lights.sample(si.p, u_sel, glam::Vec2::new(ux, uy)) else {
+            let Some(sample) = light_sample(scene, si, frame, wo, material, n, u) else {
                 continue;
             };
-            let wi = frame.to_local(ls.wi);
-            let (f, bsdf_pdf) = material.eval_pdf(wo, wi);
-            let f = f * wi.z.abs();
-            if f == Color::ZERO {
-                continue;
-            }
-            let (ray, t_max) = if ls.infinite {
-                (si.spawn_ray(ls.wi), f32::INFINITY)
-            } else {
-                si.spawn_ray_to(ls.p, ls.p_err, ls.n)
-            };
-            let w = if ls.delta {
-                1.0
-            } else {
-                power_heuristic(n as f32 * ls.pdf, bsdf_pdf)
-            };
-            pending[k].write((ray, t_max, f * ls.le * (w / ls.pdf)));
+            pending[k].write(sample);
             k += 1;
         }
         i += m;
@@ -266,7 +266,7 @@ fn planar<const LAMBERT: bool>(
     stats: &mut RayStats,
 ) -> Color {
     // Lambertian: the albedo and the side `wo` is on (`sample_lights` checked it is lit).
-    let (albedo, side) = match (&material.bsdf, material_side(material, wo)) {
+    let (albedo, side) = match (&material.bsdf, material.orient(wo)) {
         (Bsdf::Lambert(b), Some(side)) => (b.albedo, side),
         _ => (Color::ZERO, 1.0),
     };
@@ -414,17 +414,4 @@ fn planar<const LAMBERT: bool>(
         sum * light.radiance
     };
     sum / nf
-}
-
-/// `Material::orient` for a reflective material: which side of the surface `wo` is on, as
-/// the sign that maps it to the front, or None where a one-sided surface is seen from behind.
-#[inline]
-fn material_side(material: &Material, wo: Vec3A) -> Option<f32> {
-    if wo.z > 0.0 {
-        Some(1.0)
-    } else if wo.z < 0.0 && material.two_sided {
-        Some(-1.0)
-    } else {
-        None
-    }
 }

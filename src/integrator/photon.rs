@@ -82,11 +82,7 @@ pub(crate) fn direct_light(
             continue;
         }
         if vis == Visibility::Unknown {
-            let (ray, t_max) = if ls.infinite {
-                (si.spawn_ray(ls.wi), f32::INFINITY)
-            } else {
-                si.spawn_ray_to(ls.p, ls.p_err, ls.n)
-            };
+            let (ray, t_max) = si.spawn_ray_to_light(&ls);
             stats.shadow_rays += 1;
             if scene.occluded(&ray, t_max) {
                 continue;

@@ -151,7 +151,7 @@ impl Material {
     /// For reflective BSDFs, maps a direction pair seen from the back into the front
     /// hemisphere. Returns None when the one-sided surface is seen from behind.
     #[inline]
-    fn orient(&self, wo: Vec3A) -> Option<f32> {
+    pub(crate) fn orient(&self, wo: Vec3A) -> Option<f32> {
         if self.is_transmissive() {
             return Some(1.0);
         }

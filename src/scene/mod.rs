@@ -73,6 +73,17 @@ impl Interaction {
         Ray::new(offset_ray_origin(self.p, self.p_err, self.ng, d), d)
     }
 
+    /// The shadow ray towards a light sample, and the parametric distance up to which it
+    /// must be unobstructed (to infinity for a light at infinity).
+    #[inline]
+    pub fn spawn_ray_to_light(&self, ls: &crate::light::LightSample) -> (Ray, f32) {
+        if ls.infinite {
+            (self.spawn_ray(ls.wi), f32::INFINITY)
+        } else {
+            self.spawn_ray_to(ls.p, ls.p_err, ls.n)
+        }
+    }
+
     /// A shadow ray from this point to the point `p2` (normal `n2`, error `err2`); returns
     /// the ray and the parametric distance up to which it must be unobstructed.
     #[inline]
