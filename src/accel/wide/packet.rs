@@ -183,12 +183,14 @@ mod avx {
                 // needs both slabs and tests every child.
                 let mut rel = [[0f32; 4]; 6];
                 let mut cand = 0b1111;
+                // Children every active lane surely enters (coherent packets only).
+                let mut all = 0;
                 if COHERENT {
                     let near: [__m128; 3] =
                         std::array::from_fn(|a| _mm_sub_ps(slab(coh.near[a]), l.o[a]));
                     let far: [__m128; 3] =
                         std::array::from_fn(|a| _mm_sub_ps(slab(coh.far[a]), l.o[a]));
-                    cand = coh.children(&near, &far);
+                    (cand, all) = coh.children(&near, &far);
                     for a in 0..3 {
                         _mm_storeu_ps(rel[2 * a].as_mut_ptr(), near[a]);
                         _mm_storeu_ps(rel[2 * a + 1].as_mut_ptr(), far[a]);
@@ -205,6 +207,17 @@ mod avx {
                     cand &= cand - 1;
                     let child = node.child[c];
                     if child == EMPTY {
+                        continue;
+                    }
+                    if all & (1 << c) != 0 {
+                        // Entered by every active lane: no lane's own test can fail.
+                        if next == EMPTY {
+                            (next, next_mask) = (child, mask);
+                        } else {
+                            debug_assert!(len < STACK);
+                            stack.get_unchecked_mut(len).write((child, mask));
+                            len += 1;
+                        }
                         continue;
                     }
                     // Per axis, the entry and exit distance of each lane: its near and far
@@ -298,8 +311,9 @@ mod avx {
         /// The smallest and largest 1/d of the active lanes, splatted.
         lo: [__m128; 3],
         hi: [__m128; 3],
-        /// The largest `t_max`.
+        /// The largest and the smallest `t_max`.
         t_max: __m128,
+        t_min: __m128,
     }
 
     impl Coherent {
@@ -312,6 +326,7 @@ mod avx {
                 lo: [z; 3],
                 hi: [z; 3],
                 t_max: z,
+                t_min: z,
             }
         }
 
@@ -379,30 +394,44 @@ mod avx {
                 lo,
                 hi,
                 t_max: reduce(&l.t_max, true),
+                t_min: reduce(&l.t_max, false),
             })
         }
 
-        /// Bit c: child c may be entered by some lane (`near`, `far`: the node's near and far
-        /// slabs minus the origin).
+        /// Bits c: child c may be entered by some lane, and child c is entered by every
+        /// active lane (`near`, `far`: the node's near and far slabs minus the origin).
+        ///
+        /// The second is the first's bounds the other way round: the largest entry and the
+        /// smallest exit distance any lane can have; where even those meet, each lane's own
+        /// entry and exit distances, which lie between the bounds, meet too.
         #[inline]
         #[target_feature(enable = "avx")]
-        fn children(&self, near: &[__m128; 3], far: &[__m128; 3]) -> u32 {
+        fn children(&self, near: &[__m128; 3], far: &[__m128; 3]) -> (u32, u32) {
             let mut tn = [_mm_setzero_ps(); 3];
             let mut tf = [_mm_setzero_ps(); 3];
+            let mut tn_hi = [_mm_setzero_ps(); 3];
+            let mut tf_lo = [_mm_setzero_ps(); 3];
             for a in 0..3 {
                 let (n, f) = (near[a], far[a]);
-                tn[a] = _mm_min_ps(_mm_mul_ps(n, self.lo[a]), _mm_mul_ps(n, self.hi[a]));
-                tf[a] = _mm_max_ps(_mm_mul_ps(f, self.lo[a]), _mm_mul_ps(f, self.hi[a]));
+                let (n_lo, n_hi) = (_mm_mul_ps(n, self.lo[a]), _mm_mul_ps(n, self.hi[a]));
+                let (f_lo, f_hi) = (_mm_mul_ps(f, self.lo[a]), _mm_mul_ps(f, self.hi[a]));
+                tn[a] = _mm_min_ps(n_lo, n_hi);
+                tn_hi[a] = _mm_max_ps(n_lo, n_hi);
+                tf[a] = _mm_max_ps(f_lo, f_hi);
+                tf_lo[a] = _mm_min_ps(f_lo, f_hi);
             }
-            let tnear = _mm_max_ps(
-                _mm_max_ps(_mm_max_ps(tn[0], tn[1]), tn[2]),
-                _mm_setzero_ps(),
-            );
-            let tfar = _mm_mul_ps(
-                _mm_min_ps(_mm_min_ps(_mm_min_ps(tf[0], tf[1]), tf[2]), self.t_max),
-                _mm_set1_ps(1.0 + 2.0 * gamma(3)),
-            );
-            _mm_movemask_ps(_mm_cmple_ps(tnear, tfar)) as u32
+            let widen = _mm_set1_ps(1.0 + 2.0 * gamma(3));
+            let zero = _mm_setzero_ps();
+            let max3 = |t: [__m128; 3]| _mm_max_ps(_mm_max_ps(_mm_max_ps(t[0], t[1]), t[2]), zero);
+            let min3 = |t: [__m128; 3], t_max| {
+                _mm_mul_ps(
+                    _mm_min_ps(_mm_min_ps(_mm_min_ps(t[0], t[1]), t[2]), t_max),
+                    widen,
+                )
+            };
+            let some = _mm_cmple_ps(max3(tn), min3(tf, self.t_max));
+            let every = _mm_cmple_ps(max3(tn_hi), min3(tf_lo, self.t_min));
+            (_mm_movemask_ps(some) as u32, _mm_movemask_ps(every) as u32)
         }
     }
 }
