@@ -16,9 +16,9 @@
 //! The shadow rays of a vertex share their origin and are traced as packets of up to sixteen
 //! ([`crate::accel::ShadowPacket`]). When the scene's only light is a triangle or a
 //! parallelogram (`Lights::single_planar`, the case of most test scenes and of the TNCG15
-//! room), the batch's samples, BSDF values and MIS weights are computed four lanes at a time
-//! (glam's `Vec4`), with everything the samples share (the light choice, the light's offset,
-//! the material's side, a Lambertian BSDF's colour) worked out once per vertex.
+//! room), the batch's samples, BSDF values and MIS weights are computed eight or four lanes at
+//! a time ([`planar`]), with everything the samples share (the light's offset, the material's
+//! side, a Lambertian BSDF's colour) worked out once per vertex.
 
 mod lanes;
 mod planar;
