@@ -130,18 +130,24 @@ mod avx {
             o: [pk.o.x, pk.o.y, pk.o.z].map(|x| _mm_set1_ps(x)),
         };
         match Coherent::new(&lanes, active) {
-            Some(c) => traverse::<true, F>(bvh, &lanes, &c, active, hit),
+            Some(c) if c.one_sign => traverse::<COHERENT, F>(bvh, &lanes, &c, active, hit),
+            Some(c) => traverse::<FINITE, F>(bvh, &lanes, &c, active, hit),
             None => {
                 let c = Coherent::none();
-                traverse::<false, F>(bvh, &lanes, &c, active, hit)
+                traverse::<ANY, F>(bvh, &lanes, &c, active, hit)
             }
         }
     }
 
-    /// The traversal, for a coherent packet (`COHERENT`: every active lane's 1/d of one sign
-    /// and finite on each axis, see [`Coherent`]) or any other.
+    /// Kinds of packet, by their active lanes' reciprocal directions: on each axis finite and
+    /// of one sign, finite, or any.
+    const COHERENT: u8 = 2;
+    const FINITE: u8 = 1;
+    const ANY: u8 = 0;
+
+    /// The traversal, for a packet of kind `KIND` (see [`Coherent`]).
     #[target_feature(enable = "avx")]
-    unsafe fn traverse<const COHERENT: bool, F: FnMut(usize, u32) -> u32>(
+    unsafe fn traverse<const KIND: u8, F: FnMut(usize, u32) -> u32>(
         bvh: &WideBvh,
         l: &Lanes,
         coh: &Coherent,
@@ -180,12 +186,12 @@ mod avx {
                 // test's `slab − o`, which the origin shared by all lanes lets us share too.
                 // A coherent packet needs only each axis's near and far slab (the same for
                 // all its lanes) and first culls the children no lane enters; any other
-                // needs both slabs and tests every child.
+                // needs both slabs, and a packet of finite directions culls with both.
                 let mut rel = [[0f32; 4]; 6];
                 let mut cand = 0b1111;
                 // Children every active lane surely enters (coherent packets only).
                 let mut all = 0;
-                if COHERENT {
+                if KIND == COHERENT {
                     let near: [__m128; 3] =
                         std::array::from_fn(|a| _mm_sub_ps(slab(coh.near[a]), l.o[a]));
                     let far: [__m128; 3] =
@@ -196,8 +202,13 @@ mod avx {
                         _mm_storeu_ps(rel[2 * a + 1].as_mut_ptr(), far[a]);
                     }
                 } else {
-                    for (s, r) in rel.iter_mut().enumerate() {
-                        _mm_storeu_ps(r.as_mut_ptr(), _mm_sub_ps(slab(s), l.o[s / 2]));
+                    let both: [__m128; 6] =
+                        std::array::from_fn(|s| _mm_sub_ps(slab(s), l.o[s / 2]));
+                    if KIND == FINITE {
+                        cand = coh.children_finite(&both);
+                    }
+                    for (r, v) in rel.iter_mut().zip(both) {
+                        _mm_storeu_ps(r.as_mut_ptr(), v);
                     }
                 }
                 let mut next = EMPTY;
@@ -235,7 +246,7 @@ mod avx {
                         }
                         let slabs = |a: usize| {
                             let inv = inv[a][h];
-                            if COHERENT {
+                            if KIND == COHERENT {
                                 (_mm256_mul_ps(lo[a], inv), _mm256_mul_ps(hi[a], inv))
                             } else {
                                 (
@@ -293,12 +304,14 @@ mod avx {
         }
     }
 
-    /// A packet whose active lanes have, on each axis, reciprocal directions of one sign and
-    /// finite (most of next-event estimation's: rays from a point to a small light). All its
-    /// lanes then use the same near and far slab per axis, and the packet can be taken as one
-    /// ray with an interval of reciprocal directions per axis, for a test of a node's four
-    /// children at once that rejects those no lane enters (three in four, in the TNCG15
-    /// room) before the exact test of each lane against the others.
+    /// A packet whose active lanes have finite reciprocal directions, taken as one ray with
+    /// an interval of reciprocal directions per axis, for a test of a node's four children
+    /// at once that rejects those no lane enters before the exact test of each lane against
+    /// the others. Where on each axis the 1/d are of one sign too (most of next-event
+    /// estimation's packets: rays from a point to a small light), all lanes use the same near
+    /// and far slab per axis, and the test needs only those (it rejects three children in
+    /// four in the TNCG15 room); otherwise it takes both slabs (`children_finite`: about a
+    /// quarter of the room's packets, from points within the light's extent along x or y).
     ///
     /// That test never rejects a box a lane enters: a rounded product x·(1/d) is monotonic in
     /// 1/d, so its smallest and largest values over the lanes are those at the smallest and
@@ -306,6 +319,8 @@ mod avx {
     /// through the same max/min/widening as each lane's (monotonic too), so a lane with
     /// entry ≤ exit makes the bounds pass.
     struct Coherent {
+        /// On every axis, the active lanes' 1/d have one sign (else only finite).
+        one_sign: bool,
         near: [usize; 3],
         far: [usize; 3],
         /// The smallest and largest 1/d of the active lanes, splatted.
@@ -321,6 +336,7 @@ mod avx {
             // SAFETY: SSE is part of x86-64; never read (the general traversal ignores it).
             let z = unsafe { _mm_setzero_ps() };
             Coherent {
+                one_sign: false,
                 near: [0, 2, 4],
                 far: [1, 3, 5],
                 lo: [z; 3],
@@ -377,18 +393,19 @@ mod avx {
             // magnitude (NaN fails every test).
             let (zero, big) = (_mm_setzero_ps(), _mm_set1_ps(f32::MAX));
             let abs = |v: __m128| _mm_andnot_ps(_mm_set1_ps(-0.0), v);
-            let mut ok = 0b1111;
+            let (mut finite, mut one_sign) = (0b1111, 0b1111);
             for a in 0..3 {
                 let sign = _mm_or_ps(_mm_cmplt_ps(zero, lo[a]), _mm_cmplt_ps(hi[a], zero));
-                let finite =
-                    _mm_and_ps(_mm_cmple_ps(abs(lo[a]), big), _mm_cmple_ps(abs(hi[a]), big));
-                ok &= _mm_movemask_ps(_mm_and_ps(sign, finite));
+                let fin = _mm_and_ps(_mm_cmple_ps(abs(lo[a]), big), _mm_cmple_ps(abs(hi[a]), big));
+                finite &= _mm_movemask_ps(fin);
+                one_sign &= _mm_movemask_ps(sign);
             }
-            if ok != 0b1111 {
+            if finite != 0b1111 {
                 return None;
             }
             let neg: [usize; 3] = std::array::from_fn(|a| (_mm_cvtss_f32(hi[a]) < 0.0) as usize);
             Some(Coherent {
+                one_sign: one_sign == 0b1111,
                 near: std::array::from_fn(|a| 2 * a + neg[a]),
                 far: std::array::from_fn(|a| 2 * a + 1 - neg[a]),
                 lo,
@@ -396,6 +413,41 @@ mod avx {
                 t_max: reduce(&l.t_max, true),
                 t_min: reduce(&l.t_max, false),
             })
+        }
+
+        /// Bit c: child c may be entered by some lane, for finite 1/d of any signs (`both`:
+        /// the node's six slabs minus the origin, lower then upper per axis).
+        ///
+        /// A lane's entry and exit distances on an axis are the smaller and the larger of
+        /// its two slab products `s·(1/d)`; each product, rounded, is monotonic in 1/d, so
+        /// over the lanes it lies between its values at the smallest and the largest 1/d.
+        /// The smallest of the four products bounds every lane's entry from below, the
+        /// largest every lane's exit from above, with the same max/min/widening after.
+        #[inline]
+        #[target_feature(enable = "avx")]
+        fn children_finite(&self, both: &[__m128; 6]) -> u32 {
+            let mut tn = [_mm_setzero_ps(); 3];
+            let mut tf = [_mm_setzero_ps(); 3];
+            for a in 0..3 {
+                let (s0, s1) = (both[2 * a], both[2 * a + 1]);
+                let p = [
+                    _mm_mul_ps(s0, self.lo[a]),
+                    _mm_mul_ps(s0, self.hi[a]),
+                    _mm_mul_ps(s1, self.lo[a]),
+                    _mm_mul_ps(s1, self.hi[a]),
+                ];
+                tn[a] = _mm_min_ps(_mm_min_ps(p[0], p[1]), _mm_min_ps(p[2], p[3]));
+                tf[a] = _mm_max_ps(_mm_max_ps(p[0], p[1]), _mm_max_ps(p[2], p[3]));
+            }
+            let tnear = _mm_max_ps(
+                _mm_max_ps(_mm_max_ps(tn[0], tn[1]), tn[2]),
+                _mm_setzero_ps(),
+            );
+            let tfar = _mm_mul_ps(
+                _mm_min_ps(_mm_min_ps(_mm_min_ps(tf[0], tf[1]), tf[2]), self.t_max),
+                _mm_set1_ps(1.0 + 2.0 * gamma(3)),
+            );
+            _mm_movemask_ps(_mm_cmple_ps(tnear, tfar)) as u32
         }
 
         /// Bits c: child c may be entered by some lane, and child c is entered by every
