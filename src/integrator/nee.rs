@@ -82,7 +82,17 @@ pub(crate) fn sample_lights(
                 },
                 _ => planar::planar::<false>,
             };
-            planar(scene, light, si, frame, wo, material, n, delta, stats)
+            let vertex = planar::Vertex {
+                scene,
+                light,
+                si,
+                frame,
+                wo,
+                material,
+                n,
+                delta,
+            };
+            planar(&vertex, stats)
         }
         _ if n == 1 => one_sample(scene, si, frame, wo, material, delta, stats),
         _ => any_lights(scene, si, frame, wo, material, n, delta, stats),

@@ -220,59 +220,54 @@ mod avx {
                     if child == EMPTY {
                         continue;
                     }
-                    if all & (1 << c) != 0 {
+                    let m = if all & (1 << c) != 0 {
                         // Entered by every active lane: no lane's own test can fail.
-                        if next == EMPTY {
-                            (next, next_mask) = (child, mask);
-                        } else {
-                            debug_assert!(len < STACK);
-                            stack.get_unchecked_mut(len).write((child, mask));
-                            len += 1;
-                        }
-                        continue;
-                    }
-                    // Per axis, the entry and exit distance of each lane: its near and far
-                    // slab times its 1/d. In a coherent packet `rel` holds them already; else
-                    // each lane picks them by the sign of its 1/d (blendv takes the second
-                    // operand where the sign bit is set). Eight lanes at a time, skipping
-                    // eights with no lane in the mask.
-                    let lo: [__m256; 3] = std::array::from_fn(|a| _mm256_set1_ps(rel[2 * a][c]));
-                    let hi: [__m256; 3] =
-                        std::array::from_fn(|a| _mm256_set1_ps(rel[2 * a + 1][c]));
-                    let mut m = 0;
-                    for h in 0..HALVES {
-                        if (mask >> (8 * h)) & 0xff == 0 {
-                            continue;
-                        }
-                        let slabs = |a: usize| {
-                            let inv = inv[a][h];
-                            if KIND == COHERENT {
-                                (_mm256_mul_ps(lo[a], inv), _mm256_mul_ps(hi[a], inv))
-                            } else {
-                                (
-                                    _mm256_mul_ps(_mm256_blendv_ps(lo[a], hi[a], inv), inv),
-                                    _mm256_mul_ps(_mm256_blendv_ps(hi[a], lo[a], inv), inv),
-                                )
+                        mask
+                    } else {
+                        // Per axis, the entry and exit distance of each lane: its near and far
+                        // slab times its 1/d. In a coherent packet `rel` holds them already; else
+                        // each lane picks them by the sign of its 1/d (blendv takes the second
+                        // operand where the sign bit is set). Eight lanes at a time, skipping
+                        // eights with no lane in the mask.
+                        let lo: [__m256; 3] =
+                            std::array::from_fn(|a| _mm256_set1_ps(rel[2 * a][c]));
+                        let hi: [__m256; 3] =
+                            std::array::from_fn(|a| _mm256_set1_ps(rel[2 * a + 1][c]));
+                        let mut m = 0;
+                        for h in 0..HALVES {
+                            if (mask >> (8 * h)) & 0xff == 0 {
+                                continue;
                             }
-                        };
-                        let (tn_x, tf_x) = slabs(0);
-                        let (tn_y, tf_y) = slabs(1);
-                        let (tn_z, tf_z) = slabs(2);
-                        // The operand order of `RayBoxes::test` (max/min return the second
-                        // operand when either is NaN).
-                        let tnear =
-                            _mm256_max_ps(_mm256_max_ps(_mm256_max_ps(tn_x, tn_y), tn_z), zero);
-                        let tfar = _mm256_mul_ps(
-                            _mm256_min_ps(
-                                _mm256_min_ps(_mm256_min_ps(tf_x, tf_y), tf_z),
-                                l.t_max[h],
-                            ),
-                            widen,
-                        );
-                        let enter = _mm256_cmp_ps::<_CMP_LE_OQ>(tnear, tfar);
-                        m |= (_mm256_movemask_ps(enter) as u32) << (8 * h);
-                    }
-                    let m = m & mask;
+                            let slabs = |a: usize| {
+                                let inv = inv[a][h];
+                                if KIND == COHERENT {
+                                    (_mm256_mul_ps(lo[a], inv), _mm256_mul_ps(hi[a], inv))
+                                } else {
+                                    (
+                                        _mm256_mul_ps(_mm256_blendv_ps(lo[a], hi[a], inv), inv),
+                                        _mm256_mul_ps(_mm256_blendv_ps(hi[a], lo[a], inv), inv),
+                                    )
+                                }
+                            };
+                            let (tn_x, tf_x) = slabs(0);
+                            let (tn_y, tf_y) = slabs(1);
+                            let (tn_z, tf_z) = slabs(2);
+                            // The operand order of `RayBoxes::test` (max/min return the second
+                            // operand when either is NaN).
+                            let tnear =
+                                _mm256_max_ps(_mm256_max_ps(_mm256_max_ps(tn_x, tn_y), tn_z), zero);
+                            let tfar = _mm256_mul_ps(
+                                _mm256_min_ps(
+                                    _mm256_min_ps(_mm256_min_ps(tf_x, tf_y), tf_z),
+                                    l.t_max[h],
+                                ),
+                                widen,
+                            );
+                            let enter = _mm256_cmp_ps::<_CMP_LE_OQ>(tnear, tfar);
+                            m |= (_mm256_movemask_ps(enter) as u32) << (8 * h);
+                        }
+                        m & mask
+                    };
                     if m == 0 {
                         continue;
                     }

@@ -36,47 +36,37 @@ static LATTICE_V: [f32; 263] = {
     t
 };
 
-/// The batch's estimate at `si`, divided by `n`; `LAMBERT`: the material is Lambertian and
-/// `wo` is on a side it reflects on (`sample_lights` checked).
+/// A vertex's batch: the light, the shading point, its frame and material, the direction
+/// the path arrived from (local), the number of samples and the lattice's shift Δ.
+#[derive(Clone, Copy)]
+pub(super) struct Vertex<'a> {
+    pub scene: &'a Scene,
+    pub light: &'a PlanarLight,
+    pub si: &'a Interaction,
+    pub frame: &'a Frame,
+    pub wo: Vec3A,
+    pub material: &'a Material,
+    pub n: u32,
+    pub delta: [f32; 3],
+}
+
+/// The batch's estimate, divided by `n`; `LAMBERT`: the material is Lambertian and `wo` is
+/// on a side it reflects on (`sample_lights` checked).
 #[inline(never)]
-#[allow(clippy::too_many_arguments)]
-pub(super) fn planar<const LAMBERT: bool>(
-    scene: &Scene,
-    light: &PlanarLight,
-    si: &Interaction,
-    frame: &Frame,
-    wo: Vec3A,
-    material: &Material,
-    n: u32,
-    delta: [f32; 3],
-    stats: &mut RayStats,
-) -> Color {
+pub(super) fn planar<const LAMBERT: bool>(v: &Vertex, stats: &mut RayStats) -> Color {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx") {
         // SAFETY: the CPU has AVX, checked just above.
-        return unsafe {
-            planar_avx::<LAMBERT>(scene, light, si, frame, wo, material, n, delta, stats)
-        };
+        return unsafe { planar_avx::<LAMBERT>(v, stats) };
     }
-    planar_in::<Vec4, LAMBERT>(scene, light, si, frame, wo, material, n, delta, stats)
+    planar_in::<Vec4, LAMBERT>(v, stats)
 }
 
 /// [`planar`] eight lanes at a time; the CPU must have AVX.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx")]
-#[allow(clippy::too_many_arguments)]
-unsafe fn planar_avx<const LAMBERT: bool>(
-    scene: &Scene,
-    light: &PlanarLight,
-    si: &Interaction,
-    frame: &Frame,
-    wo: Vec3A,
-    material: &Material,
-    n: u32,
-    delta: [f32; 3],
-    stats: &mut RayStats,
-) -> Color {
-    planar_in::<super::lanes::F8, LAMBERT>(scene, light, si, frame, wo, material, n, delta, stats)
+unsafe fn planar_avx<const LAMBERT: bool>(v: &Vertex, stats: &mut RayStats) -> Color {
+    planar_in::<super::lanes::F8, LAMBERT>(v, stats)
 }
 
 /// (Δ + offset) mod 1 for Δ and offsets in [0, 1): one subtraction, exact by Sterbenz's lemma.
@@ -91,18 +81,17 @@ fn wrap<V: Lanes>(x: V) -> V {
 /// rays and weights, the weights' algebra rearranged to spare the divider (see the comments
 /// below), so the values agree to rounding, not bit for bit.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn planar_in<V: Lanes, const LAMBERT: bool>(
-    scene: &Scene,
-    light: &PlanarLight,
-    si: &Interaction,
-    frame: &Frame,
-    wo: Vec3A,
-    material: &Material,
-    n: u32,
-    delta: [f32; 3],
-    stats: &mut RayStats,
-) -> Color {
+fn planar_in<V: Lanes, const LAMBERT: bool>(vx: &Vertex, stats: &mut RayStats) -> Color {
+    let Vertex {
+        scene,
+        light,
+        si,
+        frame,
+        wo,
+        material,
+        n,
+        delta,
+    } = *vx;
     // Lambertian: the albedo and the side `wo` is on (`sample_lights` checked it is lit).
     let (albedo, side) = match (&material.bsdf, material.orient(wo)) {
         (Bsdf::Lambert(b), Some(side)) => (b.albedo, side),
@@ -336,33 +325,24 @@ indices = [[0, 2, 1]]"#;
                     let frame = Frame::from_normal(si.ns);
                     let wo = frame.to_local(-ray.d);
                     let n = [2, 8, 10, 16, 21][k % 5];
-                    let delta = sampler.next_3d();
                     let (mut s4, mut s8) = (RayStats::default(), RayStats::default());
-                    let run = |lambert: bool, stats: &mut RayStats, avx: bool| {
-                        let args = (&scene, planar_light, &si, &frame, wo, material, n, delta);
-                        match (lambert, avx) {
-                            (true, false) => planar_in::<Vec4, true>(
-                                args.0, args.1, args.2, args.3, args.4, args.5, args.6, args.7,
-                                stats,
-                            ),
-                            (false, false) => planar_in::<Vec4, false>(
-                                args.0, args.1, args.2, args.3, args.4, args.5, args.6, args.7,
-                                stats,
-                            ),
-                            // SAFETY: the CPU has AVX, checked above.
-                            (true, true) => unsafe {
-                                planar_avx::<true>(
-                                    args.0, args.1, args.2, args.3, args.4, args.5, args.6, args.7,
-                                    stats,
-                                )
-                            },
-                            (false, true) => unsafe {
-                                planar_avx::<false>(
-                                    args.0, args.1, args.2, args.3, args.4, args.5, args.6, args.7,
-                                    stats,
-                                )
-                            },
-                        }
+                    let vx = Vertex {
+                        scene: &scene,
+                        light: planar_light,
+                        si: &si,
+                        frame: &frame,
+                        wo,
+                        material,
+                        n,
+                        delta: sampler.next_3d(),
+                    };
+                    let run = |lambert: bool, stats: &mut RayStats, avx: bool| match (lambert, avx)
+                    {
+                        (true, false) => planar_in::<Vec4, true>(&vx, stats),
+                        (false, false) => planar_in::<Vec4, false>(&vx, stats),
+                        // SAFETY: the CPU has AVX, checked above.
+                        (true, true) => unsafe { planar_avx::<true>(&vx, stats) },
+                        (false, true) => unsafe { planar_avx::<false>(&vx, stats) },
                     };
                     let lambert = matches!(material.bsdf, Bsdf::Lambert(_));
                     if lambert && material.orient(wo).is_none() {
