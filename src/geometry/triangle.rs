@@ -73,6 +73,18 @@ impl Triangle {
         let q = s.cross(e1);
         // det = e1·p, and u, v and t times det: four dot products in one transposed sum.
         let [det, u_det, v_det, t_det] = dot4([e1 * p, s * p, ray.d * q, e2 * q]);
+        // Most tests miss: the hit point lies outside the triangle or behind the origin.
+        // Those are told from the signs of u·det, v·det and t·det against det, before the
+        // division (which issues one every few cycles): u·det·sign(det) < −ε|det| is
+        // u < −ε up to rounding, and such a u (or v) is a miss for the f64 test too; t·det
+        // of the other sign than det (or 0) is t ≤ 0 exactly, as the quotient keeps its
+        // sign. NaNs pass on to the tests below, as before.
+        let sign = det.to_bits() & 0x8000_0000;
+        let flip = |x: f32| f32::from_bits(x.to_bits() ^ sign);
+        let bound = -EDGE_EPS * det.abs();
+        if flip(t_det) <= 0.0 || flip(u_det) < bound || flip(v_det) < bound {
+            return None;
+        }
         let inv_det = 1.0 / det;
         let u = u_det * inv_det;
         let v = v_det * inv_det;
