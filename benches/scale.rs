@@ -5,6 +5,7 @@
 //!     cargo bench --bench scale            (all four sizes; about a minute and 2 GB at 10 M)
 //!     cargo bench --bench scale -- 1000000 (sizes up to this count)
 //!     cargo bench --bench scale -- 1000000 --build-only  (no renders)
+//!     cargo bench --bench scale -- --phases  (also the wall time of each build phase)
 
 #[path = "common.rs"]
 mod common;
@@ -20,6 +21,8 @@ fn main() {
         .unwrap_or(u64::MAX);
     // `--build-only`: builds without rendering (for instruction counts of the build).
     let build_only = std::env::args().any(|a| a == "--build-only");
+    let phases = std::env::args().any(|a| a == "--phases");
+    let mut phase_lines = Vec::new();
     let base = common::bunny();
     println!(
         "| triangles | build (s) | build (M tri/s) | bytes/triangle | SAH cost | samples/s (M) | vs 10 k |"
@@ -40,6 +43,11 @@ fn main() {
         let scene = Scene::build(copy);
         let build = t.elapsed().as_secs_f64();
         let bytes = scene.memory_bytes() as f64 / scene.prim_count() as f64;
+        phase_lines.push(format!(
+            "{} triangles: {}",
+            scene.prim_count(),
+            scene.build_times.summary()
+        ));
         if build_only {
             println!(
                 "| {} | {:.2} | {:.2} | {:.0} | {:.1} | – | – |",
@@ -77,5 +85,11 @@ fn main() {
             first / rate
         );
         drop(desc);
+    }
+    if phases {
+        println!();
+        for l in phase_lines {
+            println!("{l}");
+        }
     }
 }

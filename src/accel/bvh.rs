@@ -12,6 +12,7 @@
 //! Inputs of [`CLUSTER_MIN`] primitives or more are built over pairs of neighbours
 //! ([`cluster`]). The result depends only on the input, never on the thread count.
 
+use super::BuildTimes;
 use crate::geometry::Aabb;
 use glam::{BVec4A, Vec3A, Vec4};
 use std::mem::MaybeUninit;
@@ -161,11 +162,14 @@ const SAMPLES: usize = 1 << 10;
 
 /// Builds the binary tree over `refs`, which it may reorder: over the primitives
 /// themselves, or over clusters of them when there are at least [`CLUSTER_MIN`].
-pub fn build(refs: &mut [PrimRef]) -> Bvh {
+/// Marks its phases in `times`.
+pub fn build(refs: &mut [PrimRef], times: &mut BuildTimes) -> Bvh {
     if refs.len() >= CLUSTER_MIN {
-        cluster::build(refs)
+        cluster::build(refs, times)
     } else {
-        build_sah::<MAX_LEAF>(refs)
+        let bvh = build_sah::<MAX_LEAF>(refs);
+        times.mark("binary SAH tree");
+        bvh
     }
 }
 

@@ -6,7 +6,7 @@ use super::{
     META_MATERIAL, SPHERE,
 };
 use crate::accel::bvh::{self, PrimRef};
-use crate::accel::WideBvh;
+use crate::accel::{BuildTimes, WideBvh};
 use crate::geometry::{Aabb, Sphere, Triangle};
 use crate::light::{AreaLight, LightShape, Lights, OtherLight};
 use glam::Vec3A;
@@ -14,6 +14,7 @@ use rayon::prelude::*;
 
 impl Scene {
     pub fn build(mut desc: SceneDesc) -> Scene {
+        let mut times = BuildTimes::start();
         // Primitives in the description's order: vertex indices (or a sphere), material and
         // flags, and bounds.
         let mut tris: Vec<[u32; 3]> = Vec::new();
@@ -130,6 +131,7 @@ impl Scene {
                 Aabb::from_points(&idx.map(|i| Vec3A::from(positions[i as usize])))
             }
         };
+        times.mark("primitives");
         let mut refs: Vec<PrimRef> = tris
             .par_iter()
             .enumerate()
@@ -170,7 +172,8 @@ impl Scene {
             .collect();
         // The padding vertex that `Scene::vertex_fast` may read past the last one.
         positions.push(glam::Vec3::ZERO);
-        let bvh = bvh::build(&mut refs);
+        times.mark("bounds");
+        let bvh = bvh::build(&mut refs, &mut times);
         drop(refs);
         let order = &bvh.order;
         let tris: Vec<[u32; 3]> = order
@@ -178,7 +181,9 @@ impl Scene {
             .with_min_len(1 << 12)
             .map(|&i| tris[i as usize])
             .collect();
+        times.mark("reorder");
         let wide = WideBvh::from_binary(&bvh, &|p| tris[p as usize][0] == SPHERE);
+        times.mark("4-wide collapse");
         let meta: Vec<u32> = order
             .par_iter()
             .with_min_len(1 << 12)
@@ -199,7 +204,9 @@ impl Scene {
                 })
                 .collect()
         };
+        times.mark("materials and emitters");
         Scene {
+            build_times: times,
             tris,
             meta,
             positions,

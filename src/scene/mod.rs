@@ -118,6 +118,8 @@ pub struct Scene {
     pub textures: Vec<crate::texture::Texture>,
     pub cameras: Vec<(String, CameraDesc)>,
     pub desc_settings: desc::FileSettings,
+    /// How long each phase of `Scene::build` took.
+    pub build_times: crate::accel::BuildTimes,
 }
 
 impl Scene {

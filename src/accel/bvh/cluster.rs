@@ -12,6 +12,7 @@
 //! of up to four, faster still to build, cost 10 % (see docs/performance.md).
 
 use super::{build_sah, Bvh, PrimRef};
+use crate::accel::BuildTimes;
 use crate::geometry::Aabb;
 use glam::Vec3A;
 use rayon::prelude::*;
@@ -30,8 +31,9 @@ const RADIX_BITS: u32 = 10;
 
 /// The tree over clusters of `refs` (which it leaves as they are); `order` lists the
 /// primitives cluster by cluster in the tree's order.
-pub(super) fn build(refs: &[PrimRef]) -> Bvh {
+pub(super) fn build(refs: &[PrimRef], times: &mut BuildTimes) -> Bvh {
     let keys = sorted_keys(refs);
+    times.mark("Morton sort");
     // Clusters: runs of consecutive keys, formed in fixed chunks of the curve (so the result
     // depends on the input only, not on the threads).
     let parts: Vec<(Vec<u32>, Vec<Aabb>)> = keys
@@ -49,7 +51,9 @@ pub(super) fn build(refs: &[PrimRef]) -> Bvh {
     }
     starts.push(keys.len() as u32);
     let range = |c: usize| starts[c] as usize..starts[c + 1] as usize;
+    times.mark("clusters");
     let mut bvh = build_sah::<1>(&mut clusters);
+    times.mark("binary SAH tree");
     // Positions of the clusters' first primitives in the final order.
     let mut prim_start = Vec::with_capacity(bvh.order.len() + 1);
     let mut at = 0u32;
@@ -65,6 +69,7 @@ pub(super) fn build(refs: &[PrimRef]) -> Bvh {
         .flat_map_iter(|&c| keys[range(c as usize)].iter().map(|&k| k as u32))
         .collect();
     bvh.prim_start = prim_start;
+    times.mark("cluster order");
     bvh
 }
 
@@ -218,7 +223,7 @@ mod tests {
             .enumerate()
             .map(|(i, b)| PrimRef::new(b, i as u32))
             .collect();
-        let bvh = build(&refs);
+        let bvh = build(&refs, &mut BuildTimes::start());
         let mut seen = vec![false; n];
         let mut stack = vec![0usize];
         while let Some(i) = stack.pop() {
