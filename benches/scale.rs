@@ -6,6 +6,7 @@
 //!     cargo bench --bench scale -- 1000000 (sizes up to this count)
 //!     cargo bench --bench scale -- 1000000 --build-only  (no renders)
 //!     cargo bench --bench scale -- --phases  (also the wall time of each build phase)
+//!     cargo bench --bench scale -- --builds 5  (the fastest of five builds of each size)
 
 #[path = "common.rs"]
 mod common;
@@ -17,11 +18,18 @@ use std::time::Instant;
 fn main() {
     let max: u64 = std::env::args()
         .skip(1)
-        .find_map(|a| a.parse().ok())
+        .zip(std::env::args())
+        .find_map(|(a, before)| a.parse().ok().filter(|_| before != "--builds"))
         .unwrap_or(u64::MAX);
     // `--build-only`: builds without rendering (for instruction counts of the build).
     let build_only = std::env::args().any(|a| a == "--build-only");
     let phases = std::env::args().any(|a| a == "--phases");
+    let args: Vec<String> = std::env::args().collect();
+    let builds: usize = args
+        .iter()
+        .position(|a| a == "--builds")
+        .and_then(|i| args.get(i + 1)?.parse().ok())
+        .unwrap_or(1);
     let mut phase_lines = Vec::new();
     let base = common::bunny();
     println!(
@@ -37,11 +45,18 @@ fn main() {
         let mesh = common::subdivide(&base, k);
         let desc = common::bunny_scene(mesh);
         // (The copy is the benchmark's, so that `desc` can be dropped after the build; it is
-        // not part of the build.)
-        let copy = desc.clone();
-        let t = Instant::now();
-        let scene = Scene::build(copy);
-        let build = t.elapsed().as_secs_f64();
+        // not part of the build.) With `--builds K`, the fastest of K builds counts.
+        let mut fastest: Option<(f64, Scene)> = None;
+        for _ in 0..builds.max(1) {
+            let copy = desc.clone();
+            let t = Instant::now();
+            let scene = Scene::build(copy);
+            let build = t.elapsed().as_secs_f64();
+            if fastest.as_ref().is_none_or(|(b, _)| build < *b) {
+                fastest = Some((build, scene));
+            }
+        }
+        let (build, scene) = fastest.unwrap();
         let bytes = scene.memory_bytes() as f64 / scene.prim_count() as f64;
         phase_lines.push(format!(
             "{} triangles: {}",

@@ -334,7 +334,7 @@ fn build_node<const L: usize>(
     let sampled = samples as f32 / n as f32;
     match best {
         Some((axis, bin, cost)) if split_pays::<L>(n, area, cost / sampled) => {
-            let (mid, l, r) = partition(refs, |c| bin3((c - cmin) * scale, last)[axis] <= bin);
+            let (mid, l, r) = partition(refs, cmin, scale, axis, (bin + 1) as f32);
             if mid == 0 || mid == n {
                 // Cannot happen (the sampled bins held primitives on both sides); kept so
                 // that the node layout can never underflow.
@@ -484,7 +484,9 @@ fn small_node<const L: usize>(
     if n <= L && !split_pays::<L>(n, area, cost) {
         return emit_leaf(nodes, out, out_len);
     }
-    // Children's sorted lists: each axis's list filtered by side, order kept.
+    // Children's sorted lists: each axis's list filtered by side, order kept. Branch-free
+    // (each index is written to both lists, and one of the two ends advances): the side is
+    // unpredictable, and the branch cost a misprediction every other primitive.
     let mut left = [false; SWEEP_MAX];
     for &i in &ord[axis][..mid] {
         left[i as usize] = true;
@@ -494,13 +496,13 @@ fn small_node<const L: usize>(
     for a in 0..3 {
         let (mut l, mut r) = (0, 0);
         for &i in &ord[a][..n] {
-            if left[i as usize] {
-                lord[a][l] = i;
-                l += 1;
-            } else {
-                rord[a][r] = i;
-                r += 1;
-            }
+            let goes_left = left[i as usize] as usize;
+            // (l ≤ mid and r ≤ n − mid, and both are below n ≤ SWEEP_MAX until the last
+            // primitive has been written.)
+            lord[a][l % SWEEP_MAX] = i;
+            rord[a][r % SWEEP_MAX] = i;
+            l += goes_left;
+            r += 1 - goes_left;
         }
     }
     let bounds_of = |o: &[u8]| {
@@ -581,39 +583,41 @@ fn interior<const L: usize>(
     }
 }
 
-/// In-place partition by `goes_left(doubled centroid)`; returns the split index and the
-/// bounds and centroid bounds of both sides. Neither side is empty when the split came from
-/// bins holding primitives on both sides.
-fn partition<F: Fn(Vec3A) -> bool>(
+/// In-place partition of `refs`: to the left those whose doubled centroid `c` has
+/// `(c - cmin) * scale < limit` along `axis` (that is, those in bins below `limit`; a NaN
+/// goes right, as `bin3` clamps it to the last bin); returns the split index and the bounds
+/// and centroid bounds of both sides. Neither side is empty when the split came from bins
+/// holding primitives on both sides.
+///
+/// Branch-free (Lomuto's scheme with the swap made unconditional, as in Edelkamp and Weiß,
+/// "BlockQuicksort", ESA 2016, and pdqsort): which side a primitive goes to is a coin flip
+/// the branch predictor loses half the time, and Hoare's scheme paid a misprediction for
+/// every other primitive of every level of the tree.
+fn partition(
     refs: &mut [PrimRef],
-    goes_left: F,
+    cmin: Vec3A,
+    scale: Vec3A,
+    axis: usize,
+    limit: f32,
 ) -> (usize, (Aabb, Aabb), (Aabb, Aabb)) {
-    let (mut lb, mut lc, mut rb, mut rc) = (Aabb::EMPTY, Aabb::EMPTY, Aabb::EMPTY, Aabb::EMPTY);
-    let grow = |b: &mut Aabb, c: &mut Aabb, r: &PrimRef| {
-        b.min = b.min.min(r.lo());
-        b.max = b.max.max(r.hi());
-        c.grow_point(r.c2());
-    };
-    let (mut i, mut j) = (0, refs.len());
-    loop {
-        while i < j && goes_left(refs[i].c2()) {
-            grow(&mut lb, &mut lc, &refs[i]);
-            i += 1;
+    let limit = Vec3A::splat(limit);
+    let bit = 1 << axis;
+    let n = refs.len();
+    let mut j = 0;
+    for i in 0..n {
+        // SAFETY: j <= i < n.
+        unsafe {
+            let r = *refs.get_unchecked(i);
+            let left = ((r.c2() - cmin) * scale).cmplt(limit).bitmask() & bit != 0;
+            *refs.get_unchecked_mut(i) = *refs.get_unchecked(j);
+            *refs.get_unchecked_mut(j) = r;
+            j += left as usize;
         }
-        while i < j && !goes_left(refs[j - 1].c2()) {
-            grow(&mut rb, &mut rc, &refs[j - 1]);
-            j -= 1;
-        }
-        if i >= j {
-            break;
-        }
-        refs.swap(i, j - 1);
-        grow(&mut lb, &mut lc, &refs[i]);
-        grow(&mut rb, &mut rc, &refs[j - 1]);
-        i += 1;
-        j -= 1;
     }
-    (i, (lb, lc), (rb, rc))
+    // The sides' bounds in a second pass (the primitives are in cache now): growing one
+    // side's or the other's by selects inside the loop cost more than this pass.
+    let (l, r) = refs.split_at(j);
+    (j, bounds_of(l), bounds_of(r))
 }
 
 #[cfg(test)]
@@ -637,6 +641,52 @@ mod tests {
             assert_eq!(lanes(r.lo()), [-1.0, 2.0, 3.0, 0.0]);
             assert_eq!(lanes(r.c2())[3], 0.0);
             assert_eq!(r.bounds().min, b.min);
+        }
+    }
+
+    /// The partition keeps every primitive once, puts exactly those below the limit on the
+    /// left, and returns both sides' bounds and centroid bounds.
+    #[test]
+    fn partition_splits_by_bin_and_bounds_each_side() {
+        let mut x = 0x2545_f491u32;
+        let mut f = || {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            (x >> 8) as f32 / (1 << 24) as f32
+        };
+        let refs: Vec<PrimRef> = (0..1000)
+            .map(|i| {
+                let c = Vec3A::new(f(), f(), f()) * 8.0;
+                let h = Vec3A::new(f(), f(), f()) * 0.1;
+                PrimRef::new(
+                    &Aabb {
+                        min: c - h,
+                        max: c + h,
+                    },
+                    i,
+                )
+            })
+            .collect();
+        let (_, cb) = bounds_of(&refs);
+        let scale = Vec3A::splat(16.0 * (1.0 - 1e-6)) / cb.extent();
+        for axis in 0..3 {
+            for limit in [1.0f32, 5.0, 15.0] {
+                let mut v = refs.clone();
+                let (mid, (lb, lc), (rb, rc)) = partition(&mut v, cb.min, scale, axis, limit);
+                let left = |r: &PrimRef| ((r.c2() - cb.min) * scale)[axis] < limit;
+                assert!(v[..mid].iter().all(left) && !v[mid..].iter().any(left));
+                let mut seen: Vec<u32> = v.iter().map(PrimRef::index).collect();
+                seen.sort();
+                assert_eq!(seen, (0..1000).collect::<Vec<u32>>());
+                for ((b, c), side) in [((lb, lc), &v[..mid]), ((rb, rc), &v[mid..])] {
+                    let (eb, ec) = bounds_of(side);
+                    assert_eq!(
+                        (b.min, b.max, c.min, c.max),
+                        (eb.min, eb.max, ec.min, ec.max)
+                    );
+                }
+            }
         }
     }
 }
