@@ -65,7 +65,7 @@ fn main() {
         ));
         if build_only {
             println!(
-                "| {} | {:.2} | {:.2} | {:.0} | {:.1} | – | – |",
+                "| {} | {:.2} | {:.2} | {:.0} | {:.2} | – | – |",
                 scene.prim_count(),
                 build,
                 scene.prim_count() as f64 / build / 1e6,
@@ -90,7 +90,7 @@ fn main() {
         let rate = stats.samples as f64 / stats.elapsed.as_secs_f64();
         let first = *first_rate.get_or_insert(rate);
         println!(
-            "| {} | {:.2} | {:.2} | {:.0} | {:.1} | {:.2} | {:.2}× slower |",
+            "| {} | {:.2} | {:.2} | {:.0} | {:.2} | {:.2} | {:.2}× slower |",
             scene.prim_count(),
             build,
             scene.prim_count() as f64 / build / 1e6,

@@ -1,6 +1,7 @@
 //! Acceleration structures: a bounding volume hierarchy over all primitives.
 
 pub mod bvh;
+pub(crate) mod huge_pages;
 pub mod timing;
 pub mod wide;
 pub use bvh::Bvh;

@@ -58,26 +58,44 @@ const MERGE_MIN_PRIMS: usize = 4096;
 const MERGE_MAX: u32 = 4;
 const MERGE_AREA: f32 = 12.0;
 
-/// Subtrees over more primitives than this, and than a sixteenth of the tree, are collapsed
-/// in parallel. (Each level of parallel collapse copies its subtrees' nodes into the parent's
-/// array once more, so only the top few levels are worth it.)
+/// The weight of fringe merging in a tree over `n` primitives within `root` (0: none).
+pub(crate) fn merge_weight(n: usize, root: &Aabb) -> f32 {
+    if n < MERGE_MIN_PRIMS {
+        0.0
+    } else {
+        n as f32 / (MERGE_AREA * root.surface_area())
+    }
+}
+
+/// Whether a subtree over `prims` primitives in `leaves` leaves (some `costly`) within
+/// `bounds` becomes one leaf, in a tree of merge weight `weight` (see [`merge_weight`]).
+#[inline]
+pub(crate) fn merges(prims: u32, leaves: u32, costly: bool, bounds: &Aabb, weight: f32) -> bool {
+    weight != 0.0
+        && prims <= MERGE_MAX
+        && leaves <= 3
+        && !costly
+        && bounds.surface_area() * weight < 1.0
+}
+
+/// The top of the tree, down to subtrees over at most this many primitives, and at most a
+/// sixty-fourth of the tree, is collapsed sequentially, and those subtrees in parallel (see
+/// `Collapse::top`): enough of them for the threads to share the work evenly.
 const PARALLEL_MIN: u32 = 1 << 15;
-const PARALLEL_SHARE: u32 = 16;
+const PARALLEL_SHARE: u32 = 64;
 
 /// What the collapse needs besides the binary tree.
 struct Collapse<'a> {
     b: &'a Bvh,
-    /// Whether the primitive at this position of the BVH's order is costly to test (a sphere).
-    costly: &'a (dyn Fn(u32) -> bool + Sync),
     /// Fringe subtrees whose surface area times this is below 1 become leaves (0: none).
     merge_weight: f32,
-    /// Subtrees over more primitives than this are collapsed in parallel.
+    /// Subtrees over at most this many primitives are collapsed as one parallel task.
     parallel_min: u32,
 }
 
 impl WideBvh {
     /// Collapses a binary BVH; primitive indices keep the binary tree's order.
-    pub fn from_binary(b: &Bvh, costly: &(dyn Fn(u32) -> bool + Sync)) -> WideBvh {
+    pub fn from_binary(b: &Bvh) -> WideBvh {
         let mut w = WideBvh {
             nodes: Vec::new(),
             root: EMPTY,
@@ -91,19 +109,14 @@ impl WideBvh {
         let n = b.order.len();
         let c = Collapse {
             b,
-            costly,
-            merge_weight: if n < MERGE_MIN_PRIMS {
-                0.0
-            } else {
-                n as f32 / (MERGE_AREA * root.bounds().surface_area())
-            },
+            merge_weight: merge_weight(n, &root.bounds()),
             parallel_min: PARALLEL_MIN.max(root.prims() / PARALLEL_SHARE),
         };
         if root.is_leaf() {
             let (first, count) = b.prim_range(root);
             w.root = leaf_ref(first, count);
         } else {
-            w.nodes = c.subtree(0);
+            w.nodes = c.top();
             w.root = 0;
         }
         w
@@ -299,31 +312,87 @@ impl WideBvh {
 
 impl Collapse<'_> {
     /// Whether inner node `k` becomes a leaf: it has at most three leaves under it (its own
-    /// wide node would be underfull), fewer than 16 primitives, and a small surface area.
+    /// wide node would be underfull), at most `MERGE_MAX` primitives, none costly (see
+    /// `bvh::build`), and a small surface area. (The build records the leaves and the
+    /// costly primitive in the node, so only it is read.)
     fn fringe(&self, k: usize) -> bool {
-        let b = self.b;
-        let n = b.node(k);
-        let (first, count) = b.prim_range(n);
-        if self.merge_weight == 0.0
-            || count > MERGE_MAX
-            || n.bounds().surface_area() * self.merge_weight >= 1.0
-        {
-            return false;
+        let n = self.b.node(k);
+        merges(
+            n.prims(),
+            n.leaves(),
+            n.costly(),
+            &n.bounds(),
+            self.merge_weight,
+        )
+    }
+
+    /// The wide nodes of the whole tree (root inner), its root first. The top, down to
+    /// subtrees over at most `parallel_min` primitives, is collapsed here; those subtrees
+    /// are collapsed in parallel, each into its own array, and the arrays copied once, in
+    /// parallel too, into the tree's after the top's nodes, in a fixed order (the layout
+    /// depends on the tree alone, not on the threads).
+    fn top(&self) -> Vec<Node4> {
+        let mut top = Vec::new();
+        // (wide node, slot, binary node) of each subtree left to the parallel collapse
+        let mut tasks = Vec::new();
+        self.collapse_top(0, &mut top, &mut tasks);
+        use rayon::prelude::*;
+        let subs: Vec<Vec<Node4>> = tasks.par_iter().map(|&(_, _, k)| self.subtree(k)).collect();
+        let total = top.len() + subs.iter().map(Vec::len).sum::<usize>();
+        let mut out: Vec<Node4> = super::huge_pages::with_capacity(total);
+        let mut jobs = Vec::with_capacity(subs.len());
+        let mut base = top.len();
+        let mut rest = &mut out.spare_capacity_mut()[top.len()..total];
+        for (&(w, slot, _), sub) in tasks.iter().zip(subs) {
+            top[w].child[slot] = base as ChildRef;
+            let (here, next) = std::mem::take(&mut rest).split_at_mut(sub.len());
+            rest = next;
+            jobs.push((sub, here, base as u32));
+            base += jobs.last().unwrap().0.len();
         }
-        if (first..first + count).any(|p| (self.costly)(p)) {
-            return false;
+        jobs.into_par_iter().for_each(|(sub, here, base)| {
+            for (o, mut n) in here.iter_mut().zip(sub) {
+                for c in &mut n.child {
+                    if *c & LEAF == 0 {
+                        *c += base;
+                    }
+                }
+                o.write(n);
+            }
+        });
+        // SAFETY: the jobs wrote every slot from top.len() to total, and top fills the rest.
+        unsafe {
+            std::ptr::copy_nonoverlapping(top.as_ptr(), out.as_mut_ptr(), top.len());
+            out.set_len(total);
         }
-        let (l, r) = (b.node(k + 1), b.node(b.right(k)));
-        let two_leaves = |i: usize| {
-            b.node(i).is_leaf() || (b.node(i + 1).is_leaf() && b.node(b.right(i)).is_leaf())
-        };
-        (l.is_leaf() && two_leaves(b.right(k))) || (r.is_leaf() && two_leaves(k + 1))
+        out
+    }
+
+    /// The sequential top of [`Self::top`]: appends the wide node for binary inner node `i`
+    /// to `out`, and recurses into its inner children over more than `parallel_min`
+    /// primitives; the others go to `tasks`.
+    fn collapse_top(&self, i: usize, out: &mut Vec<Node4>, tasks: &mut Vec<(usize, usize, usize)>) {
+        let (node, kids) = self.node(i);
+        let index = out.len();
+        out.push(node);
+        for (slot, &(k, area)) in kids.iter().enumerate() {
+            if area < 0.0 {
+                continue;
+            }
+            if self.b.node(k).prims() > self.parallel_min {
+                let r = out.len() as ChildRef;
+                out[index].child[slot] = r;
+                self.collapse_top(k, out, tasks);
+            } else {
+                tasks.push((index, slot, k));
+            }
+        }
     }
 
     /// The wide nodes of the subtree under binary inner node `i`, its root first; child
     /// references count from the start of the returned array.
     fn subtree(&self, i: usize) -> Vec<Node4> {
-        let mut out = Vec::with_capacity(self.b.node(i).prims() as usize / 2 + 1);
+        let mut out = super::huge_pages::with_capacity(self.b.node(i).prims() as usize / 2 + 1);
         self.collapse(i, &mut out);
         out
     }
@@ -331,8 +400,23 @@ impl Collapse<'_> {
     /// Appends the wide node for binary inner node `i` and its subtree to `out`; returns
     /// its index.
     fn collapse(&self, i: usize, out: &mut Vec<Node4>) -> ChildRef {
+        let (node, kids) = self.node(i);
+        let index = out.len();
+        out.push(node);
+        for (slot, &(k, area)) in kids.iter().enumerate() {
+            if area >= 0.0 {
+                let r = self.collapse(k, out);
+                out[index].child[slot] = r;
+            }
+        }
+        index as ChildRef
+    }
+
+    /// The wide node for binary inner node `i`, its inner children's references left
+    /// `EMPTY`, and its children: (binary node, its surface area, or −1 for a leaf).
+    #[inline]
+    fn node(&self, i: usize) -> (Node4, ArrayVec4) {
         let b = self.b;
-        // (binary node, its surface area, or −1 for what stays a leaf)
         let kid = |k: usize| {
             let n = b.node(k);
             let inner = !n.is_leaf() && !self.fringe(k);
@@ -361,7 +445,6 @@ impl Collapse<'_> {
             kids[len] = kid(b.right(k));
             len += 1;
         }
-        let index = out.len();
         let (lo, hi) = (Vec4::splat(f32::INFINITY), Vec4::splat(f32::NEG_INFINITY));
         let mut node = Node4 {
             bounds: [lo, hi, lo, hi, lo, hi],
@@ -378,38 +461,19 @@ impl Collapse<'_> {
                 node.child[slot] = leaf_ref(first, count);
             }
         }
-        out.push(node);
-        let inner = |&(_, area): &(usize, f32)| area >= 0.0;
-        if b.node(i).prims() > self.parallel_min {
-            // The inner children's subtrees on their own, then appended in slot order.
-            use rayon::prelude::*;
-            let subs: Vec<(usize, Vec<Node4>)> = kids[..len]
-                .par_iter()
-                .enumerate()
-                .filter(|(_, k)| inner(k))
-                .map(|(slot, &(k, _))| (slot, self.subtree(k)))
-                .collect();
-            for (slot, sub) in subs {
-                let base = out.len() as u32;
-                out[index].child[slot] = base;
-                out.extend(sub.into_iter().map(|mut n| {
-                    for c in &mut n.child {
-                        if *c & LEAF == 0 {
-                            *c += base;
-                        }
-                    }
-                    n
-                }));
-            }
-        } else {
-            for (slot, &(k, area)) in kids[..len].iter().enumerate() {
-                if area >= 0.0 {
-                    let r = self.collapse(k, out);
-                    out[index].child[slot] = r;
-                }
-            }
-        }
-        index as ChildRef
+        (node, ArrayVec4 { kids, len })
+    }
+}
+
+/// Up to four children of a wide node, as [`Collapse::node`] gives them.
+struct ArrayVec4 {
+    kids: [(usize, f32); 4],
+    len: usize,
+}
+
+impl ArrayVec4 {
+    fn iter(&self) -> std::slice::Iter<'_, (usize, f32)> {
+        self.kids[..self.len].iter()
     }
 }
 

@@ -169,6 +169,13 @@ impl Triangle {
         0.5 * self.normal_unnormalized().length()
     }
 
+    /// Whether `area()` is positive, without its square root (the square root of a
+    /// positive number, halved, is positive; NaN is not).
+    #[inline]
+    pub fn has_area(&self) -> bool {
+        self.normal_unnormalized().length_squared() > 0.0
+    }
+
     /// The point with barycentric weights (1-u-v, u, v) and its floating-point error bound
     /// (pbrt-v4 §6.8.4: γ(7) times the sum of the magnitudes of the weighted vertices).
     #[inline]
@@ -185,5 +192,46 @@ impl Triangle {
     pub fn sample_uniform(u: glam::Vec2) -> (f32, f32) {
         let su = u.x.sqrt();
         (1.0 - su, u.y * su)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `has_area` says what `area() > 0` says, for ordinary, tiny, degenerate and non-finite
+    /// triangles.
+    #[test]
+    fn has_area_agrees_with_area() {
+        let v = |x: f32, y: f32, z: f32| Vec3A::new(x, y, z);
+        let mut tris = vec![
+            Triangle::new(v(0.0, 0.0, 0.0), v(1.0, 0.0, 0.0), v(0.0, 1.0, 0.0)),
+            Triangle::new(v(0.0, 0.0, 0.0), v(1.0, 1.0, 1.0), v(2.0, 2.0, 2.0)),
+            Triangle::new(v(1.0, 2.0, 3.0), v(1.0, 2.0, 3.0), v(1.0, 2.0, 3.0)),
+            Triangle::new(v(0.0, 0.0, 0.0), v(f32::NAN, 0.0, 0.0), v(0.0, 1.0, 0.0)),
+            Triangle::new(
+                v(0.0, 0.0, 0.0),
+                v(f32::INFINITY, 0.0, 0.0),
+                v(0.0, 1.0, 0.0),
+            ),
+        ];
+        for e in [1e-3f32, 1e-10, 1e-19, 1e-20, 1e-22, 1e-23, 1e-30, 1e-38] {
+            tris.push(Triangle::new(
+                v(0.0, 0.0, 0.0),
+                v(e, 0.0, 0.0),
+                v(0.0, e, 0.0),
+            ));
+            tris.push(Triangle::new(
+                v(1.0, 1.0, 1.0),
+                v(1.0 + e, 1.0, 1.0),
+                v(1.0, 1.0 + e, 1.0),
+            ));
+        }
+        let mut kinds = [0; 2];
+        for t in &tris {
+            assert_eq!(t.has_area(), t.area() > 0.0, "{t:?}");
+            kinds[t.has_area() as usize] += 1;
+        }
+        assert!(kinds[0] >= 4 && kinds[1] >= 4, "both kinds: {kinds:?}");
     }
 }

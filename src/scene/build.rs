@@ -6,7 +6,7 @@ use super::{
     META_MATERIAL, SPHERE,
 };
 use crate::accel::bvh::{self, PrimRef};
-use crate::accel::{BuildTimes, WideBvh};
+use crate::accel::{huge_pages, BuildTimes, WideBvh};
 use crate::geometry::{Aabb, Sphere, Triangle};
 use crate::light::{AreaLight, LightShape, Lights, OtherLight};
 use glam::Vec3A;
@@ -68,17 +68,31 @@ impl Scene {
                         });
                     }
                     let vertex = |i: u32| Vec3A::from(mesh.positions[i as usize]);
-                    // Degenerate triangles can never be hit and cannot emit; drop them.
-                    let kept: Vec<[u32; 3]> = mesh
-                        .indices
-                        .par_iter()
-                        .with_min_len(1 << 12)
-                        .filter(|idx| {
-                            let [a, b, c] = idx.map(vertex);
-                            Triangle::new(a, b, c).area() > 0.0
-                        })
-                        .map(|idx| idx.map(|i| i + base))
-                        .collect();
+                    // Degenerate triangles can never be hit and cannot emit; drop them. (The
+                    // common case, none, keeps the mesh's own array when it is the first.)
+                    let has_area = |idx: &[u32; 3]| {
+                        let [a, b, c] = idx.map(vertex);
+                        Triangle::new(a, b, c).has_area()
+                    };
+                    let kept: Vec<[u32; 3]> =
+                        if !mesh.indices.par_iter().with_min_len(1 << 12).all(has_area) {
+                            mesh.indices
+                                .par_iter()
+                                .with_min_len(1 << 12)
+                                .filter(|idx| has_area(idx))
+                                .map(|idx| idx.map(|i| i + base))
+                                .collect()
+                        } else if base == 0 {
+                            mesh.indices
+                        } else {
+                            let mut v = huge_pages::with_capacity(mesh.indices.len());
+                            mesh.indices
+                                .par_iter()
+                                .with_min_len(1 << 12)
+                                .map(|idx| idx.map(|i| i + base))
+                                .collect_into_vec(&mut v);
+                            v
+                        };
                     if let Some(e) = emission {
                         let kept_tris: Vec<Triangle> = kept
                             .iter()
@@ -132,12 +146,12 @@ impl Scene {
             }
         };
         times.mark("primitives");
-        let mut refs: Vec<PrimRef> = tris
-            .par_iter()
+        let mut refs: Vec<PrimRef> = huge_pages::with_capacity(tris.len());
+        tris.par_iter()
             .enumerate()
             .with_min_len(1 << 12)
-            .map(|(i, idx)| PrimRef::new(&bounds_of(idx), i as u32))
-            .collect();
+            .map(|(i, idx)| PrimRef::new(&bounds_of(idx), i as u32, idx[0] == SPHERE))
+            .collect_into_vec(&mut refs);
         // (Minimum and maximum are exact, so any grouping of this reduction gives the same.)
         let world = refs
             .par_iter()
@@ -173,22 +187,25 @@ impl Scene {
         // The padding vertex that `Scene::vertex_fast` may read past the last one.
         positions.push(glam::Vec3::ZERO);
         times.mark("bounds");
-        let bvh = bvh::build(&mut refs, &mut times);
-        drop(refs);
+        let bvh = bvh::build(refs, &mut times);
         let order = &bvh.order;
-        let tris: Vec<[u32; 3]> = order
+        let mut reordered = huge_pages::with_capacity(tris.len());
+        order
             .par_iter()
             .with_min_len(1 << 12)
             .map(|&i| tris[i as usize])
-            .collect();
+            .collect_into_vec(&mut reordered);
+        let tris: Vec<[u32; 3]> = reordered;
         times.mark("reorder");
-        let wide = WideBvh::from_binary(&bvh, &|p| tris[p as usize][0] == SPHERE);
+        let wide = WideBvh::from_binary(&bvh);
         times.mark("4-wide collapse");
-        let meta: Vec<u32> = order
+        let mut reordered = huge_pages::with_capacity(meta.len());
+        order
             .par_iter()
             .with_min_len(1 << 12)
             .map(|&i| meta[i as usize])
-            .collect();
+            .collect_into_vec(&mut reordered);
+        let meta: Vec<u32> = reordered;
         // `emitting` is sorted by primitive.
         let emitters = if emitting.is_empty() {
             Vec::new()

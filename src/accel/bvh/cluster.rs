@@ -1,26 +1,36 @@
-//! The build for large inputs: the primitives sorted along a Morton curve, neighbours on the
-//! curve paired into clusters, and the binned SAH tree built over the clusters.
+//! The build for large inputs: the primitives sorted along a Morton curve, runs of
+//! neighbours on the curve grouped into clusters, the binned SAH tree built over the
+//! clusters (each counting for its primitives), and under each cluster a small tree over its
+//! own primitives.
 //!
 //! After the bottom-up grouping of HLBVH (Garanzha, Pantaleoni and McAllister, "Simpler and
-//! Faster HLBVH with Work Queues", HPG 2011), kept to the finest level: a cluster is a leaf
-//! of at most [`CLUSTER_SIZE`] primitives, formed only where its box is no larger than its
-//! primitives' boxes together (by surface area), so that it never spans a jump of the curve.
-//! The Morton sort is linear (three radix passes over 8-byte keys); the SAH build, O(n log n)
-//! and on large inputs bound by memory traffic (each level reads and rewrites every 32-byte
-//! reference), then sees about 60 % of the references. Measured on the subdivided bunny
-//! (`cargo bench --bench scale`): the tree's SAH cost rises 3 % at 1 M triangles; clusters
-//! of up to four, faster still to build, cost 10 % (see docs/performance.md).
+//! Faster HLBVH with Work Queues", HPG 2011), kept to the finest level, and the mini-trees of
+//! Bonsai (Ganestam et al., "Bonsai: Rapid Bounding Volume Hierarchy Generation using Mini
+//! Trees", JCGT 4(3), 2015): a cluster holds at most [`CLUSTER_SIZE`] consecutive primitives
+//! and forms only where its box is no larger than its primitives' boxes together (by surface
+//! area), so that it never spans a jump of the curve. The Morton sort is linear (three radix
+//! passes over 8-byte keys). The SAH build over the clusters, O(n log n) and on large inputs
+//! bound by memory traffic (each level reads and rewrites every 32-byte reference), sees
+//! about a third of the references. Measured on the subdivided bunny (`cargo bench --bench
+//! scale`, 940 k triangles, see docs/performance.md): the wide tree's SAH cost is 24.57,
+//! against 24.9 for the binary SAH tree over clusters of at most two that were leaves, and
+//! 24.84 with an exact SAH sweep under each cluster instead of [`run_tree`].
 
-use super::{build_sah, Bvh, PrimRef};
-use crate::accel::BuildTimes;
+use super::{
+    bounds_of, build_node, finish, half_area, inner, Bvh, BvhNode, Kind, PrimRef, Prims, Sub,
+    MAX_DEPTH,
+};
+use crate::accel::wide::merges;
+use crate::accel::{huge_pages, BuildTimes};
 use crate::geometry::Aabb;
 use glam::Vec3A;
 use rayon::prelude::*;
+use std::mem::MaybeUninit;
 
 /// Inputs of at least this many primitives are built over clusters.
 pub const CLUSTER_MIN: usize = 1 << 15;
-/// Most primitives in one cluster (a leaf).
-const CLUSTER_SIZE: usize = 2;
+/// Most primitives in one cluster.
+const CLUSTER_SIZE: usize = 8;
 /// A cluster's surface area may be at most this times the sum of its primitives'.
 const CLUSTER_AREA: f32 = 1.0;
 /// Clusters are formed in chunks of this many consecutive keys.
@@ -29,72 +39,263 @@ const CHUNK: usize = 1 << 16;
 const CODE_BITS: u32 = 30;
 const RADIX_BITS: u32 = 10;
 
-/// The tree over clusters of `refs` (which it leaves as they are); `order` lists the
-/// primitives cluster by cluster in the tree's order.
-pub(super) fn build(refs: &[PrimRef], times: &mut BuildTimes) -> Bvh {
-    let keys = sorted_keys(refs);
+/// The tree over `refs`: clusters of neighbours on the Morton curve, the binned SAH tree over
+/// the clusters (each counting for its primitives), and below each cluster the SAH tree over
+/// its own primitives. Nodes count primitives, as in a tree built over them directly.
+pub(super) fn build(refs: Vec<PrimRef>, times: &mut BuildTimes) -> Bvh {
+    let keys = sorted_keys(&refs);
     times.mark("Morton sort");
-    // Clusters: runs of consecutive keys, formed in fixed chunks of the curve (so the result
-    // depends on the input only, not on the threads).
-    let parts: Vec<(Vec<u32>, Vec<Aabb>)> = keys
+    let sorted = gather(&refs, &keys);
+    drop(refs);
+    drop(keys);
+    // Clusters: runs of consecutive primitives, formed in fixed chunks of the curve (so the
+    // result depends on the input only, not on the threads).
+    let parts: Vec<(Vec<u32>, Vec<PrimRef>)> = sorted
         .par_chunks(CHUNK)
         .enumerate()
-        .map(|(c, chunk)| clusters_of(refs, chunk, (c * CHUNK) as u32))
+        .map(|(c, chunk)| clusters_of(chunk, (c * CHUNK) as u32))
         .collect();
-    let mut starts = Vec::with_capacity(keys.len() / 2 + 2);
-    let mut clusters = Vec::with_capacity(keys.len() / 2 + 1);
-    for (s, b) in parts {
-        starts.extend_from_slice(&s);
-        for b in &b {
-            clusters.push(PrimRef::new(b, clusters.len() as u32));
-        }
-    }
-    starts.push(keys.len() as u32);
-    let range = |c: usize| starts[c] as usize..starts[c + 1] as usize;
+    let (start, mut clusters) = concatenate(parts, sorted.len());
     times.mark("clusters");
-    let mut bvh = build_sah::<1>(&mut clusters);
+    let n = sorted.len();
+    let mut nodes: Vec<MaybeUninit<BvhNode>> = huge_pages::with_capacity(2 * n);
+    // SAFETY: MaybeUninit needs no initialisation.
+    unsafe { nodes.set_len(2 * n) };
+    let mut order = huge_pages::zeroed(n);
+    let (b, cb) = bounds_of(&clusters);
+    let kind = Clusters {
+        sorted: &sorted,
+        start: &start,
+        merge_weight: crate::accel::wide::merge_weight(n, &b),
+    };
+    let _ = build_node(&kind, &mut nodes, &mut order, &mut clusters, 0, 0, b, cb);
     times.mark("binary SAH tree");
-    // Positions of the clusters' first primitives in the final order.
-    let mut prim_start = Vec::with_capacity(bvh.order.len() + 1);
-    let mut at = 0u32;
-    for &c in &bvh.order {
-        prim_start.push(at);
-        at += starts[c as usize + 1] - starts[c as usize];
-    }
-    prim_start.push(at);
-    bvh.order = bvh
-        .order
-        .par_iter()
-        .with_min_len(1 << 12)
-        .flat_map_iter(|&c| keys[range(c as usize)].iter().map(|&k| k as u32))
-        .collect();
-    bvh.prim_start = prim_start;
-    times.mark("cluster order");
-    bvh
+    Bvh { nodes, order }
 }
 
-/// The clusters of one chunk of the sorted keys, whose first key is the `base`-th: each
-/// cluster's first position and its bounds. A cluster takes the next primitive while it has
-/// fewer than `CLUSTER_SIZE` and its bounds' surface area stays within `CLUSTER_AREA` times
-/// the sum of its primitives' (so it never spans a jump of the curve).
-fn clusters_of(refs: &[PrimRef], chunk: &[u64], base: u32) -> (Vec<u32>, Vec<Aabb>) {
-    let bounds = |k: u64| refs[k as u32 as usize].bounds();
-    let (mut starts, mut out) = (vec![base], Vec::with_capacity(chunk.len() / 2 + 1));
-    let mut cb = bounds(chunk[0]);
+/// Clusters of primitives: a leaf of the tree over them is one cluster, under which the
+/// tree over its primitives is built.
+struct Clusters<'a> {
+    /// The primitives in Morton order: cluster `c` is `sorted[start[c]..start[c + 1]]`.
+    sorted: &'a [PrimRef],
+    start: &'a [u32],
+    /// The wide collapse's merge weight: subtrees it would merge into one leaf are built
+    /// as that leaf (see [`run_tree`]).
+    merge_weight: f32,
+}
+
+impl Kind for Clusters<'_> {
+    const MAX_LEAF: usize = 1;
+    const UNIT: bool = false;
+    #[inline(always)]
+    fn weight(r: &PrimRef) -> u32 {
+        r.weight()
+    }
+    fn leaf(
+        &self,
+        nodes: &mut [MaybeUninit<BvhNode>],
+        order: &mut [u32],
+        refs: &[PrimRef],
+        first: usize,
+        depth: usize,
+        bounds: &Aabb,
+    ) -> Sub {
+        debug_assert_eq!(refs.len(), 1);
+        let c = refs[0].index() as usize;
+        let range = self.start[c] as usize..self.start[c + 1] as usize;
+        run_tree(
+            nodes,
+            order,
+            &self.sorted[range],
+            first,
+            depth,
+            bounds,
+            self.merge_weight,
+        )
+    }
+}
+
+/// The tree over a cluster's primitives `prims`, in the order they lie along the Morton
+/// curve: each node split into the prefix and suffix of its run that the SAH prefers, down
+/// to single primitives (the wide collapse merges small subtrees into leaves again). Measured
+/// on the subdivided bunny (`cargo bench --bench scale`, 940 k triangles) against the SAH
+/// tree over each cluster's primitives by the exact sweep of [`super::sweep`] (whose leaves
+/// may hold several): wide SAH cost 24.57 against 24.84, and a fifth of the instructions;
+/// splitting each run in the middle instead gave 24.77.
+fn run_tree(
+    nodes: &mut [MaybeUninit<BvhNode>],
+    order: &mut [u32],
+    prims: &[PrimRef],
+    first: usize,
+    depth: usize,
+    bounds: &Aabb,
+    merge_weight: f32,
+) -> Sub {
+    let n = prims.len();
+    if n == 1 {
+        return Prims.leaf(nodes, order, prims, first, depth, bounds);
+    }
+    // A run of up to three primitives that the wide collapse would merge into one leaf
+    // (`wide::merges`; split down to single primitives it would have a leaf each) is that
+    // leaf already: the same wide tree, with fewer binary nodes written and read. Its
+    // parent counts the leaves the run would have had, so that it is merged (or not)
+    // just as before.
+    if n <= 3
+        && merges(n as u32, n as u32, false, bounds, merge_weight)
+        && !prims.iter().any(PrimRef::costly)
+    {
+        let _ = Prims.leaf(nodes, order, prims, first, depth, bounds);
+        return Sub {
+            leaves: n as u32,
+            costly: false,
+        };
+    }
+    // Suffix bounds (kept for the right child), then the prefix sweep.
+    let mut slo = [Vec3A::ZERO; CLUSTER_SIZE];
+    let mut shi = [Vec3A::ZERO; CLUSTER_SIZE];
+    let (mut lo, mut hi) = (prims[n - 1].lo(), prims[n - 1].hi());
+    (slo[n - 1], shi[n - 1]) = (lo, hi);
+    for k in (1..n - 1).rev() {
+        lo = lo.min(prims[k].lo());
+        hi = hi.max(prims[k].hi());
+        (slo[k], shi[k]) = (lo, hi);
+    }
+    let (mut lo, mut hi) = (prims[0].lo(), prims[0].hi());
+    // (split, its cost, the left bounds)
+    let mut best = (1, f32::INFINITY, lo, hi);
+    for k in 1..n {
+        if k > 1 {
+            lo = lo.min(prims[k - 1].lo());
+            hi = hi.max(prims[k - 1].hi());
+        }
+        let cost = k as f32 * half_area(lo, hi) + (n - k) as f32 * half_area(slo[k], shi[k]);
+        if cost < best.1 {
+            best = (k, cost, lo, hi);
+        }
+    }
+    let (mut k, _, mut llo, mut lhi) = best;
+    if depth >= MAX_DEPTH - 32 {
+        // Deep in a degenerate tree (see `build_node`): the middle, so that no path grows
+        // past `MAX_DEPTH` (the clusters above halved from `MAX_DEPTH - 32` on, fewer than
+        // 2²⁷ of them, and at most three levels below).
+        k = n / 2;
+        (llo, lhi) = (prims[0].lo(), prims[0].hi());
+        for r in &prims[1..k] {
+            llo = llo.min(r.lo());
+            lhi = lhi.max(r.hi());
+        }
+    }
+    let (head, rest) = nodes.split_first_mut().unwrap();
+    head.write(inner(bounds, first, n));
+    let (ln, rn) = rest.split_at_mut(2 * k - 1);
+    let (lo, ro) = order.split_at_mut(k);
+    let lb = Aabb { min: llo, max: lhi };
+    let rb = Aabb {
+        min: slo[k],
+        max: shi[k],
+    };
+    let a = run_tree(ln, lo, &prims[..k], first, depth + 1, &lb, merge_weight);
+    let b = run_tree(rn, ro, &prims[k..], first + k, depth + 1, &rb, merge_weight);
+    finish(head, a.join(b))
+}
+
+/// The primitives in the order of the sorted keys (whose low halves are their indices).
+/// Each read is a random access into `refs`, so the loop prefetches the reference it will
+/// read sixteen keys later.
+fn gather(refs: &[PrimRef], keys: &[u64]) -> Vec<PrimRef> {
+    const AHEAD: usize = 16;
+    const CHUNK: usize = 1 << 14;
+    let mut out = huge_pages::with_capacity(keys.len());
+    out.spare_capacity_mut()[..keys.len()]
+        .par_chunks_mut(CHUNK)
+        .zip(keys.par_chunks(CHUNK))
+        .for_each(|(o, c)| {
+            for (i, (o, &k)) in o.iter_mut().zip(c).enumerate() {
+                if let Some(&next) = c.get(i + AHEAD) {
+                    prefetch(&refs[next as u32 as usize]);
+                }
+                o.write(refs[k as u32 as usize]);
+            }
+        });
+    // SAFETY: the loop wrote every item below keys.len().
+    unsafe { out.set_len(keys.len()) };
+    out
+}
+
+#[inline(always)]
+fn prefetch<T>(p: &T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch is a hint; it reads nothing the program sees.
+    unsafe {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        _mm_prefetch(p as *const T as *const i8, _MM_HINT_T0);
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
+}
+
+/// The chunks' clusters one after the other: each cluster's first primitive (and, last, the
+/// number of primitives), and the clusters with their indices set.
+fn concatenate(parts: Vec<(Vec<u32>, Vec<PrimRef>)>, prims: usize) -> (Vec<u32>, Vec<PrimRef>) {
+    let count: usize = parts.iter().map(|(_, c)| c.len()).sum();
+    let mut start: Vec<u32> = huge_pages::with_capacity(count + 1);
+    let mut clusters: Vec<PrimRef> = huge_pages::with_capacity(count);
+    {
+        // Each part's own stretch of both arrays, split off in order.
+        let mut jobs = Vec::with_capacity(parts.len());
+        let mut s_rest = &mut start.spare_capacity_mut()[..count];
+        let mut c_rest = &mut clusters.spare_capacity_mut()[..count];
+        let mut base = 0;
+        for (s, c) in parts {
+            let (s_here, s_next) = std::mem::take(&mut s_rest).split_at_mut(s.len());
+            let (c_here, c_next) = std::mem::take(&mut c_rest).split_at_mut(c.len());
+            (s_rest, c_rest) = (s_next, c_next);
+            let len = c.len();
+            jobs.push((s, c, s_here, c_here, base));
+            base += len;
+        }
+        jobs.into_par_iter().for_each(|(s, c, s_out, c_out, base)| {
+            for (o, &x) in s_out.iter_mut().zip(&s) {
+                o.write(x);
+            }
+            for (k, (o, mut r)) in c_out.iter_mut().zip(c).enumerate() {
+                r.lo.w = f32::from_bits((base + k) as u32);
+                o.write(r);
+            }
+        });
+    }
+    // SAFETY: the parts' stretches cover 0..count, and each was written whole.
+    unsafe {
+        start.set_len(count);
+        clusters.set_len(count);
+    }
+    start.push(prims as u32);
+    (start, clusters)
+}
+
+/// The clusters of one chunk of the primitives in Morton order, whose first is the `base`-th:
+/// each cluster's first position, and a reference to it with its weight (its index is set
+/// by the caller). A cluster takes the next primitive while it has fewer than
+/// `CLUSTER_SIZE` and its bounds' surface area stays within `CLUSTER_AREA` times the sum of
+/// its primitives' (so it never spans a jump of the curve).
+fn clusters_of(chunk: &[PrimRef], base: u32) -> (Vec<u32>, Vec<PrimRef>) {
+    let mut starts = vec![base];
+    let mut out = Vec::with_capacity(chunk.len() / 2 + 1);
+    let mut cb = chunk[0].bounds();
     let (mut sum, mut len) = (cb.surface_area(), 1);
-    for (i, &k) in chunk.iter().enumerate().skip(1) {
-        let b = bounds(k);
+    for (i, r) in chunk.iter().enumerate().skip(1) {
+        let b = r.bounds();
         let u = Aabb::union(&cb, &b);
         let a = b.surface_area();
         if len == CLUSTER_SIZE || u.surface_area() > CLUSTER_AREA * (sum + a) {
             starts.push(base + i as u32);
-            out.push(cb);
+            out.push(PrimRef::cluster(&cb, 0, len as u32));
             (cb, sum, len) = (b, a, 1);
         } else {
             (cb, sum, len) = (u, sum + a, len + 1);
         }
     }
-    out.push(cb);
+    out.push(PrimRef::cluster(&cb, 0, len as u32));
     (starts, out)
 }
 
@@ -116,15 +317,15 @@ fn sorted_keys(refs: &[PrimRef]) -> Vec<u64> {
         Vec3A::splat(steps * (1.0 - 1e-6)) / ext,
         Vec3A::ZERO,
     );
-    let mut keys: Vec<u64> = refs
-        .par_iter()
+    let mut keys: Vec<u64> = huge_pages::with_capacity(refs.len());
+    refs.par_iter()
         .with_min_len(1 << 12)
         .map(|r| {
             let q = ((r.c2() - cb.min) * scale).min(Vec3A::splat(steps - 1.0));
             let code = spread(q.x as u32) | spread(q.y as u32) << 1 | spread(q.z as u32) << 2;
             (code as u64) << 32 | r.index() as u64
         })
-        .collect();
+        .collect_into_vec(&mut keys);
     radix_sort_high(&mut keys);
     keys
 }
@@ -141,31 +342,63 @@ fn spread(x: u32) -> u32 {
 }
 
 /// Sorts keys by their high 32 bits (of which the low `CODE_BITS` are used), stably: an LSD
-/// radix sort, three passes of `RADIX_BITS`, with all three histograms from one read.
+/// radix sort, three passes of `RADIX_BITS`. Each pass splits the keys into blocks, counts
+/// each block's digits in parallel, and scatters the blocks in parallel, each key to its
+/// digit's place after the keys of lower digits and of the same digit in earlier blocks, so
+/// the result is the sequential pass's, whatever the blocks or threads.
 fn radix_sort_high(keys: &mut Vec<u64>) {
     const PASSES: usize = (CODE_BITS / RADIX_BITS) as usize;
     const BUCKETS: usize = 1 << RADIX_BITS;
-    let digit = |k: u64, p: usize| ((k >> (32 + RADIX_BITS as usize * p)) as usize) & (BUCKETS - 1);
-    let mut hist = vec![[0u32; BUCKETS]; PASSES];
-    for &k in keys.iter() {
-        for (p, h) in hist.iter_mut().enumerate() {
-            h[digit(k, p)] += 1;
-        }
-    }
-    let mut tmp = vec![0u64; keys.len()];
-    for (p, h) in hist.iter_mut().enumerate() {
+    let n = keys.len();
+    let block = n.div_ceil(4 * rayon::current_num_threads()).max(1 << 14);
+    let mut tmp: Vec<u64> = huge_pages::with_capacity(n);
+    for p in 0..PASSES {
+        let shift = 32 + RADIX_BITS as usize * p;
+        let digit = |k: u64| ((k >> shift) as usize) & (BUCKETS - 1);
+        let counts: Vec<[u32; BUCKETS]> = keys
+            .par_chunks(block)
+            .map(|c| {
+                let mut h = [0u32; BUCKETS];
+                for &k in c {
+                    h[digit(k)] += 1;
+                }
+                h
+            })
+            .collect();
+        // Each block's first place for each digit.
+        let mut places = counts.clone();
         let mut sum = 0;
-        for c in h.iter_mut() {
-            (*c, sum) = (sum, sum + *c);
+        for d in 0..BUCKETS {
+            for (b, c) in counts.iter().enumerate() {
+                places[b][d] = sum;
+                sum += c[d];
+            }
         }
-        for &k in keys.iter() {
-            let d = &mut h[digit(k, p)];
-            tmp[*d as usize] = k;
-            *d += 1;
-        }
+        let out = Scatter(tmp.spare_capacity_mut().as_mut_ptr());
+        keys.par_chunks(block)
+            .zip(places)
+            .for_each(|(c, mut place)| {
+                let out = &out;
+                for &k in c {
+                    let d = &mut place[digit(k)];
+                    // SAFETY: the places of (block, digit) run from the sums of the keys
+                    // before them to that plus the block's count of the digit: the ranges
+                    // tile 0..n, and each is written once, by this block only.
+                    unsafe { (*out.0.add(*d as usize)).write(k) };
+                    *d += 1;
+                }
+            });
+        // SAFETY: the scatter wrote every place below n.
+        unsafe { tmp.set_len(n) };
         std::mem::swap(keys, &mut tmp);
+        tmp.clear();
     }
 }
+
+/// The output of a scatter, written at disjoint places from several threads.
+struct Scatter(*mut std::mem::MaybeUninit<u64>);
+// SAFETY: the threads write disjoint items (see `radix_sort_high`).
+unsafe impl Sync for Scatter {}
 
 #[cfg(test)]
 mod tests {
@@ -198,8 +431,41 @@ mod tests {
         assert_eq!(keys, expected);
     }
 
-    /// Every primitive in exactly one leaf, leaves of at most CLUSTER_SIZE, and every node's
-    /// bounds holding its primitives' and its children's.
+    /// Every primitive in exactly one leaf, leaves of at most `MAX_LEAF`, every node's
+    /// bounds holding its primitives' and its children's, and no path deeper than
+    /// `MAX_DEPTH`.
+    fn check_tree(boxes: &[Aabb]) {
+        let n = boxes.len();
+        let refs: Vec<PrimRef> = boxes
+            .iter()
+            .enumerate()
+            .map(|(i, b)| PrimRef::new(b, i as u32, false))
+            .collect();
+        let bvh = build(refs, &mut BuildTimes::start());
+        let mut seen = vec![false; n];
+        let mut stack = vec![(0usize, 1usize)];
+        while let Some((i, depth)) = stack.pop() {
+            assert!(depth <= MAX_DEPTH, "a path {depth} nodes deep");
+            let node = bvh.node(i);
+            let (first, count) = bvh.prim_range(node);
+            let nb = node.bounds();
+            for &p in &bvh.order[first as usize..(first + count) as usize] {
+                let b = &boxes[p as usize];
+                assert!(nb.min.cmple(b.min).all() && nb.max.cmpge(b.max).all());
+            }
+            if node.is_leaf() {
+                assert!((1..=super::super::MAX_LEAF as u32).contains(&count));
+                for &p in &bvh.order[first as usize..(first + count) as usize] {
+                    assert!(!seen[p as usize], "primitive {p} twice");
+                    seen[p as usize] = true;
+                }
+            } else {
+                stack.extend([(i + 1, depth + 1), (bvh.right(i), depth + 1)]);
+            }
+        }
+        assert!(seen.iter().all(|&s| s), "a primitive in no leaf");
+    }
+
     #[test]
     fn clustered_tree_covers_every_primitive_once() {
         let mut x = 12345u32;
@@ -207,8 +473,7 @@ mod tests {
             x = x.wrapping_mul(747796405).wrapping_add(2891336453);
             (x >> 8) as f32 / (1 << 24) as f32
         };
-        let n = 5000;
-        let boxes: Vec<Aabb> = (0..n)
+        let boxes: Vec<Aabb> = (0..5000)
             .map(|_| {
                 let c = Vec3A::new(f(), f() * 3.0, f()) * 10.0;
                 let h = Vec3A::new(f(), f(), f()) * 0.05;
@@ -218,32 +483,27 @@ mod tests {
                 }
             })
             .collect();
-        let refs: Vec<PrimRef> = boxes
-            .iter()
-            .enumerate()
-            .map(|(i, b)| PrimRef::new(b, i as u32))
-            .collect();
-        let bvh = build(&refs, &mut BuildTimes::start());
-        let mut seen = vec![false; n];
-        let mut stack = vec![0usize];
-        while let Some(i) = stack.pop() {
-            let node = bvh.node(i);
-            let (first, count) = bvh.prim_range(node);
-            let nb = node.bounds();
-            for &p in &bvh.order[first as usize..(first + count) as usize] {
-                let b = &boxes[p as usize];
-                assert!(nb.min.cmple(b.min).all() && nb.max.cmpge(b.max).all());
-            }
-            if node.is_leaf() {
-                assert!((1..=CLUSTER_SIZE as u32).contains(&count));
-                for &p in &bvh.order[first as usize..(first + count) as usize] {
-                    assert!(!seen[p as usize], "primitive {p} twice");
-                    seen[p as usize] = true;
+        check_tree(&boxes);
+    }
+
+    /// Degenerate inputs: every box the same (no centroid extent at all), and boxes a few
+    /// ulps apart along a line, whose splits the SAH keeps peeling off one at a time.
+    #[test]
+    fn clustered_tree_of_degenerate_input_stays_shallow() {
+        let b = Aabb {
+            min: Vec3A::splat(1.0),
+            max: Vec3A::splat(2.0),
+        };
+        check_tree(&vec![b; 40_000]);
+        let line: Vec<Aabb> = (0..40_000)
+            .map(|i| {
+                let x = 1.0 + i as f32 * f32::EPSILON;
+                Aabb {
+                    min: Vec3A::new(x, 0.0, 0.0),
+                    max: Vec3A::new(x, 1.0, 1.0),
                 }
-            } else {
-                stack.extend([i + 1, bvh.right(i)]);
-            }
-        }
-        assert!(seen.iter().all(|&s| s), "a primitive in no leaf");
+            })
+            .collect();
+        check_tree(&line);
     }
 }

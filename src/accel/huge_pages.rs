@@ -1,0 +1,61 @@
+//! Large build arrays on transparent huge pages, where Linux offers them to those that ask
+//! (`/sys/kernel/mm/transparent_hugepage/enabled` set to `madvise`, as on Debian and the
+//! development machine). A 10 M-triangle build fills about 2 GB of fresh memory; in 4 KiB
+//! pages that is half a million page faults, which took about a fifth of the build's CPU
+//! time in the kernel (`perf record`), and with 2 MiB pages the build took 15 % less wall
+//! time (`cargo bench --bench scale`, alternating the kernel setting). Elsewhere, and for
+//! small arrays, these are plain `Vec`s.
+
+/// An empty vector with room for `n` items, its whole 2 MiB pages advised to be huge ones.
+pub fn with_capacity<T>(n: usize) -> Vec<T> {
+    let v = Vec::with_capacity(n);
+    advise(v.as_ptr() as usize, n * std::mem::size_of::<T>());
+    v
+}
+
+/// A vector of `n` zeros (from fresh zeroed memory, not written), advised as above.
+pub fn zeroed(n: usize) -> Vec<u32> {
+    let v = vec![0u32; n];
+    advise(v.as_ptr() as usize, n * 4);
+    v
+}
+
+/// Asks for huge pages over the 2 MiB-aligned part of `start..start + len`. Only the
+/// kernel's choice of page size changes, never the memory's contents, and a kernel that
+/// cannot oblige (no THP, or disabled) returns an error that changes nothing, so it is
+/// ignored.
+#[cfg(target_os = "linux")]
+fn advise(start: usize, len: usize) {
+    // Arrays smaller than this are left alone (a huge page could hold most of one).
+    const MIN_BYTES: usize = 8 << 20;
+    const HUGE_PAGE: usize = 2 << 20;
+    if len < MIN_BYTES {
+        return;
+    }
+    let lo = (start + HUGE_PAGE - 1) & !(HUGE_PAGE - 1);
+    let hi = (start + len) & !(HUGE_PAGE - 1);
+    if hi > lo {
+        // SAFETY: the range lies inside an allocation this process owns, and MADV_HUGEPAGE
+        // is advice about how to back it, which leaves its contents as they are.
+        unsafe {
+            libc::madvise(lo as *mut libc::c_void, hi - lo, libc::MADV_HUGEPAGE);
+        }
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn advise(_start: usize, _len: usize) {}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn vectors_keep_their_contents() {
+        let mut v: Vec<u64> = super::with_capacity(3 << 20);
+        assert!(v.capacity() >= 3 << 20 && v.is_empty());
+        v.extend(0..3 << 20);
+        assert!(v.iter().enumerate().all(|(i, &x)| x == i as u64));
+        let z = super::zeroed(5 << 20);
+        assert_eq!(z.len(), 5 << 20);
+        assert!(z.iter().all(|&x| x == 0));
+    }
+}
