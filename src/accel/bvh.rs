@@ -319,6 +319,21 @@ fn bounds_of(refs: &[PrimRef]) -> (Aabb, Aabb) {
     (b, cb)
 }
 
+/// [`bounds_of`], and the references' total `weight`.
+#[inline(always)]
+fn bounds_weight_of(refs: &[PrimRef], weight: impl Fn(&PrimRef) -> u32) -> (Aabb, Aabb, usize) {
+    let mut b = Aabb::EMPTY;
+    let mut cb = Aabb::EMPTY;
+    let mut w = 0;
+    for r in refs {
+        b.min = b.min.min(r.lo());
+        b.max = b.max.max(r.hi());
+        cb.grow_point(r.c2());
+        w += weight(r) as usize;
+    }
+    (b, cb, w)
+}
+
 fn leaf(b: &Aabb, first: usize, count: usize) -> BvhNode {
     BvhNode {
         min: b.min.to_array(),
@@ -375,13 +390,15 @@ fn build_node<K: Kind>(
     let area = half_area(bounds.min, bounds.max).max(f32::MIN_POSITIVE);
     match binned_split(refs, &cbounds, K::weight) {
         Some(s) if split_pays::<K>(n, order.len(), area, s.cost) => {
-            let (mid, l, r) = partition(refs, s.cmin, s.scale, s.axis, s.limit);
+            let (mid, wl, l, r) = partition(refs, s.cmin, s.scale, s.axis, s.limit, K::weight);
             if mid == 0 || mid == n {
                 // Cannot happen (the sampled bins held references on both sides); kept so
                 // that the node layout can never underflow.
                 return interior_at(kind, nodes, order, refs, first, depth, &bounds, n / 2);
             }
-            interior(kind, nodes, order, refs, first, depth, &bounds, mid, l, r)
+            interior(
+                kind, nodes, order, refs, first, depth, &bounds, mid, wl, l, r,
+            )
         }
         // (Without a split every centroid lies in one bin along every axis; rare but
         // possible with centroids a few ulps apart.)
@@ -430,12 +447,25 @@ fn interior_at<K: Kind>(
     mid: usize,
 ) -> Sub {
     let (l, r) = refs.split_at(mid);
-    let (l, r) = (bounds_of(l), bounds_of(r));
-    interior(kind, nodes, order, refs, first, depth, bounds, mid, l, r)
+    let (lb, lc, wl) = bounds_weight_of(l, K::weight);
+    let r = bounds_of(r);
+    interior(
+        kind,
+        nodes,
+        order,
+        refs,
+        first,
+        depth,
+        bounds,
+        mid,
+        wl,
+        (lb, lc),
+        r,
+    )
 }
 
-/// Writes an inner node over `refs`, split at `mid`, and builds its children (in parallel
-/// when both are large).
+/// Writes an inner node over `refs`, split at `mid` (the left side standing for `wl`
+/// primitives), and builds its children (in parallel when both are large).
 #[allow(clippy::too_many_arguments)]
 fn interior<K: Kind>(
     kind: &K,
@@ -446,16 +476,12 @@ fn interior<K: Kind>(
     depth: usize,
     bounds: &Aabb,
     mid: usize,
+    wl: usize,
     (lb, lc): (Aabb, Aabb),
     (rb, rc): (Aabb, Aabb),
 ) -> Sub {
     let w = order.len();
-    // The primitives on the left: they, not the references, lay out the nodes and the order.
-    let wl = if K::UNIT {
-        mid
-    } else {
-        refs[..mid].iter().map(|r| K::weight(r) as usize).sum()
-    };
+    // (The primitives on the left, not the references, lay out the nodes and the order.)
     let (head, rest) = nodes.split_first_mut().unwrap();
     head.write(inner(bounds, first, w));
     let (left, right) = refs.split_at_mut(mid);
@@ -530,9 +556,13 @@ mod tests {
         for axis in 0..3 {
             for limit in [1.0f32, 5.0, 15.0] {
                 let mut v = refs.clone();
-                let (mid, (lb, lc), (rb, rc)) = partition(&mut v, cb.min, scale, axis, limit);
+                let weight = |r: &PrimRef| r.index() % 3 + 1;
+                let (mid, wl, (lb, lc), (rb, rc)) =
+                    partition(&mut v, cb.min, scale, axis, limit, weight);
                 let left = |r: &PrimRef| ((r.c2() - cb.min) * scale)[axis] < limit;
                 assert!(v[..mid].iter().all(left) && !v[mid..].iter().any(left));
+                let w: u32 = v[..mid].iter().map(weight).sum();
+                assert_eq!(wl, w as usize);
                 let mut seen: Vec<u32> = v.iter().map(PrimRef::index).collect();
                 seen.sort();
                 assert_eq!(seen, (0..1000).collect::<Vec<u32>>());

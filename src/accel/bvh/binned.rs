@@ -2,7 +2,7 @@
 //! bins swept for the cheapest split by the SAH (Wald, "On fast Construction of SAH-based
 //! Bounding Volume Hierarchies", RT 2007), and the in-place partition by that split.
 
-use super::{bounds_of, half_area, PrimRef, BINS, SAMPLES, SAMPLE_MIN};
+use super::{bounds_of, bounds_weight_of, half_area, PrimRef, BINS, SAMPLES, SAMPLE_MIN};
 use crate::geometry::Aabb;
 use glam::Vec3A;
 
@@ -153,7 +153,7 @@ fn binned_split_with<const NB: usize>(
 /// `(c - cmin) * scale < limit` along `axis` (that is, those in bins below `limit`; a NaN
 /// goes right, as `bin3` clamps it to the last bin); returns the split index and the bounds
 /// and centroid bounds of both sides. Neither side is empty when the split came from bins
-/// holding primitives on both sides.
+/// holding primitives on both sides. Also returns the left side's total `weight`.
 ///
 /// Branch-free (Lomuto's scheme with the swap made unconditional, as in Edelkamp and Weiß,
 /// "BlockQuicksort", ESA 2016, and pdqsort): which side a primitive goes to is a coin flip
@@ -165,7 +165,8 @@ pub fn partition(
     scale: Vec3A,
     axis: usize,
     limit: f32,
-) -> (usize, (Aabb, Aabb), (Aabb, Aabb)) {
+    weight: impl Fn(&PrimRef) -> u32,
+) -> (usize, usize, (Aabb, Aabb), (Aabb, Aabb)) {
     let limit = Vec3A::splat(limit);
     let bit = 1 << axis;
     let n = refs.len();
@@ -181,7 +182,9 @@ pub fn partition(
         }
     }
     // The sides' bounds in a second pass (the primitives are in cache now): growing one
-    // side's or the other's by selects inside the loop cost more than this pass.
+    // side's or the other's by selects inside the loop cost more than this pass. The left
+    // side's weight in the same pass.
     let (l, r) = refs.split_at(j);
-    (j, bounds_of(l), bounds_of(r))
+    let (lb, lc, wl) = bounds_weight_of(l, weight);
+    (j, wl, (lb, lc), bounds_of(r))
 }
