@@ -188,6 +188,13 @@ impl Bvh {
         // at exactly the indices this layout names; only those are read.
         unsafe { self.nodes[i].assume_init_ref() }
     }
+    /// Asks the cache for node `i` (a hint, for any `i`).
+    #[inline(always)]
+    pub fn prefetch(&self, i: usize) {
+        if let Some(n) = self.nodes.get(i) {
+            super::prefetch(n);
+        }
+    }
     #[inline]
     pub fn right(&self, i: usize) -> usize {
         i + 2 * self.node(i + 1).prims() as usize

@@ -420,6 +420,12 @@ impl Collapse<'_> {
         let kid = |k: usize| {
             let n = b.node(k);
             let inner = !n.is_leaf() && !self.fringe(k);
+            if inner {
+                // Its right child lies far from it in the array and is read next, when
+                // this node is opened or becomes a wide node itself: asked for now, the
+                // cache miss overlaps this node's other work. (The left child follows it.)
+                b.prefetch(b.right(k));
+            }
             (
                 k,
                 if inner {

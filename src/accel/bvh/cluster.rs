@@ -21,7 +21,7 @@ use super::{
     MAX_DEPTH,
 };
 use crate::accel::wide::merges;
-use crate::accel::{huge_pages, BuildTimes};
+use crate::accel::{huge_pages, prefetch, BuildTimes};
 use crate::geometry::Aabb;
 use glam::Vec3A;
 use rayon::prelude::*;
@@ -220,18 +220,6 @@ fn gather(refs: &[PrimRef], keys: &[u64]) -> Vec<PrimRef> {
     // SAFETY: the loop wrote every item below keys.len().
     unsafe { out.set_len(keys.len()) };
     out
-}
-
-#[inline(always)]
-fn prefetch<T>(p: &T) {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: a prefetch is a hint; it reads nothing the program sees.
-    unsafe {
-        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-        _mm_prefetch(p as *const T as *const i8, _MM_HINT_T0);
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = p;
 }
 
 /// The chunks' clusters one after the other: each cluster's first primitive (and, last, the
