@@ -293,7 +293,22 @@ impl Scene {
     /// [`Scene::occluded`] for each, in one traversal.
     #[inline]
     pub fn occluded_packet(&self, pk: &ShadowPacket, active: u32) -> u32 {
-        self.bvh.occluded_packet(pk, active, |i, lanes| {
+        self.bvh
+            .occluded_packet(pk, active, |i, lanes| self.packet_hits(pk, i, lanes))
+    }
+
+    /// [`Scene::occluded_packet`] without AVX-512, where the CPU has AVX (`None` where it
+    /// has not), for the tests to compare both packet traversals with single rays.
+    #[doc(hidden)]
+    pub fn occluded_packet_avx(&self, pk: &ShadowPacket, active: u32) -> Option<u32> {
+        self.bvh
+            .occluded_packet_avx(pk, active, |i, lanes| self.packet_hits(pk, i, lanes))
+    }
+
+    /// The lanes of `lanes` whose rays primitive `i` blocks.
+    #[inline(always)]
+    fn packet_hits(&self, pk: &ShadowPacket, i: usize, lanes: u32) -> u32 {
+        {
             let each = |mut m: u32, hit: &dyn Fn(usize) -> bool| {
                 let mut hits = 0;
                 while m != 0 {
@@ -344,7 +359,7 @@ impl Scene {
                 });
             }
             hits
-        })
+        }
     }
 
     /// Bytes held by the geometry the integrators trace: per-primitive indices and

@@ -3,7 +3,8 @@
 //! Next-event estimation sends its shadow rays from one shading point to nearby points on
 //! the lights, so the rays of one vertex visit nearly the same nodes. Traced together, each
 //! node is fetched and its loop, stack and branches paid once for all of them, and each
-//! child box is tested against eight rays per 8-lane AVX instruction (rays in lanes, in the
+//! child box is tested against eight rays per 8-lane AVX instruction, or all sixteen per
+//! AVX-512 instruction where the CPU has it (rays in lanes, in the
 //! manner of Wald, Slusallek, Benthin and Wagner, "Interactive Rendering with Coherent Ray
 //! Tracing", Eurographics 2001, with a mask of active rays). A ray found occluded leaves the
 //! mask; a subtree is entered only for the rays that enter its box. Before the exact tests a
@@ -17,7 +18,9 @@
 //! operand order), so a ray enters exactly the boxes it enters alone, and tests the same
 //! primitives with the caller's own test. Whether a ray is occluded is a property of the
 //! set of primitives it reaches, not of the order they are visited in. Without AVX (checked
-//! at run time; the binary is built for plain x86-64) each ray is traced on its own.
+//! at run time; the binary is built for plain x86-64) each ray is traced on its own; with
+//! AVX-512 (also checked at run time) the box tests take all sixteen lanes in one register,
+//! with the same operations lane by lane, so the answers do not depend on the CPU either.
 
 use super::{WideBvh, EMPTY, LEAF, STACK};
 use crate::geometry::{ray::gamma, Ray};
@@ -69,10 +72,32 @@ impl WideBvh {
         }
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx") {
-            // SAFETY: the CPU has AVX, checked just above.
-            return unsafe { avx::occluded(self, pk, active, &mut hit) };
+            let wide = std::arch::is_x86_feature_detected!("avx512f");
+            // SAFETY: the CPU has AVX, and AVX-512 where `wide`, checked just above.
+            return unsafe { avx::occluded(self, pk, active, wide, &mut hit) };
         }
         self.occluded_each(pk, active, hit)
+    }
+
+    /// [`Self::occluded_packet`] with AVX only, never AVX-512, for the tests that compare
+    /// both with the single-ray traversal (`None` without AVX).
+    #[doc(hidden)]
+    pub fn occluded_packet_avx<F: FnMut(usize, u32) -> u32>(
+        &self,
+        pk: &ShadowPacket,
+        active: u32,
+        mut hit: F,
+    ) -> Option<u32> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            if self.root == EMPTY || active == 0 {
+                return Some(0);
+            }
+            // SAFETY: the CPU has AVX, checked just above.
+            return Some(unsafe { avx::occluded(self, pk, active, false, &mut hit) });
+        }
+        let _ = (pk, active, &mut hit);
+        None
     }
 
     /// The same answers, each ray by the single-ray traversal: the fallback without AVX, and
@@ -118,6 +143,7 @@ mod avx {
         bvh: &WideBvh,
         pk: &ShadowPacket,
         active: u32,
+        wide: bool,
         hit: &mut F,
     ) -> u32 {
         let load = |a: &[f32; PACKET]| -> [__m256; HALVES] {
@@ -129,14 +155,61 @@ mod avx {
             t_max: load(&pk.t_max),
             o: [pk.o.x, pk.o.y, pk.o.z].map(|x| _mm_set1_ps(x)),
         };
-        match Coherent::new(&lanes, active) {
-            Some(c) if c.one_sign => traverse::<COHERENT, F>(bvh, &lanes, &c, active, hit),
-            Some(c) => traverse::<FINITE, F>(bvh, &lanes, &c, active, hit),
-            None => {
-                let c = Coherent::none();
-                traverse::<ANY, F>(bvh, &lanes, &c, active, hit)
-            }
+        let c = Coherent::new(&lanes, active);
+        let kind = match &c {
+            Some(c) if c.one_sign => COHERENT,
+            Some(_) => FINITE,
+            None => ANY,
+        };
+        let c = c.unwrap_or_else(Coherent::none);
+        match (kind, wide) {
+            (COHERENT, false) => traverse::<COHERENT, F>(bvh, &lanes, pk, &c, active, hit),
+            (FINITE, false) => traverse::<FINITE, F>(bvh, &lanes, pk, &c, active, hit),
+            (_, false) => traverse::<ANY, F>(bvh, &lanes, pk, &c, active, hit),
+            (COHERENT, true) => traverse16::<COHERENT, F>(bvh, &lanes, pk, &c, active, hit),
+            (FINITE, true) => traverse16::<FINITE, F>(bvh, &lanes, pk, &c, active, hit),
+            (_, true) => traverse16::<ANY, F>(bvh, &lanes, pk, &c, active, hit),
         }
+    }
+
+    /// The traversal with AVX: each child box against the rays eight at a time.
+    #[target_feature(enable = "avx")]
+    unsafe fn traverse<const KIND: u8, F: FnMut(usize, u32) -> u32>(
+        bvh: &WideBvh,
+        l: &Lanes,
+        _pk: &ShadowPacket,
+        coh: &Coherent,
+        active: u32,
+        hit: &mut F,
+    ) -> u32 {
+        traverse_with::<KIND, false, F>(bvh, l, None, coh, active, hit)
+    }
+
+    /// The traversal with AVX-512: each child box against all sixteen rays at once.
+    #[target_feature(enable = "avx,avx512f")]
+    unsafe fn traverse16<const KIND: u8, F: FnMut(usize, u32) -> u32>(
+        bvh: &WideBvh,
+        l: &Lanes,
+        pk: &ShadowPacket,
+        coh: &Coherent,
+        active: u32,
+        hit: &mut F,
+    ) -> u32 {
+        let one = _mm512_set1_ps(1.0);
+        let l16 = Lanes16 {
+            // The same division as the eight-lane `inv`, lane for lane.
+            inv: pk
+                .d
+                .map(|d| _mm512_div_ps(one, _mm512_loadu_ps(d.as_ptr()))),
+            t_max: _mm512_loadu_ps(pk.t_max.as_ptr()),
+        };
+        traverse_with::<KIND, true, F>(bvh, l, Some(&l16), coh, active, hit)
+    }
+
+    /// The sixteen lanes' reciprocal directions and `t_max` in AVX-512 registers.
+    struct Lanes16 {
+        inv: [__m512; 3],
+        t_max: __m512,
     }
 
     /// Kinds of packet, by their active lanes' reciprocal directions: on each axis finite and
@@ -145,11 +218,14 @@ mod avx {
     const FINITE: u8 = 1;
     const ANY: u8 = 0;
 
-    /// The traversal, for a packet of kind `KIND` (see [`Coherent`]).
-    #[target_feature(enable = "avx")]
-    unsafe fn traverse<const KIND: u8, F: FnMut(usize, u32) -> u32>(
+    /// The traversal, for a packet of kind `KIND` (see [`Coherent`]), its lanes tested eight
+    /// at a time or, with `WIDE` (and `l16`), sixteen. Inlined into [`traverse`] and
+    /// [`traverse16`], whose target features its intrinsics are compiled with.
+    #[inline(always)]
+    unsafe fn traverse_with<const KIND: u8, const WIDE: bool, F: FnMut(usize, u32) -> u32>(
         bvh: &WideBvh,
         l: &Lanes,
+        l16: Option<&Lanes16>,
         coh: &Coherent,
         active: u32,
         hit: &mut F,
@@ -223,6 +299,47 @@ mod avx {
                     let m = if all & (1 << c) != 0 {
                         // Entered by every active lane: no lane's own test can fail.
                         mask
+                    } else if WIDE {
+                        // The eight-lane test below, on all sixteen lanes at once: the same
+                        // operations in the same order (AVX-512's max and min return the
+                        // second operand on a NaN as AVX's do; the blend takes `hi` where the
+                        // sign bit of 1/d is set, as blendv does).
+                        let l16 = l16.unwrap_unchecked();
+                        let lo: [__m512; 3] =
+                            std::array::from_fn(|a| _mm512_set1_ps(rel[2 * a][c]));
+                        let hi: [__m512; 3] =
+                            std::array::from_fn(|a| _mm512_set1_ps(rel[2 * a + 1][c]));
+                        let slabs = |a: usize| {
+                            let inv = l16.inv[a];
+                            if KIND == COHERENT {
+                                (_mm512_mul_ps(lo[a], inv), _mm512_mul_ps(hi[a], inv))
+                            } else {
+                                let neg = _mm512_cmplt_epi32_mask(
+                                    _mm512_castps_si512(inv),
+                                    _mm512_setzero_si512(),
+                                );
+                                (
+                                    _mm512_mul_ps(_mm512_mask_blend_ps(neg, lo[a], hi[a]), inv),
+                                    _mm512_mul_ps(_mm512_mask_blend_ps(neg, hi[a], lo[a]), inv),
+                                )
+                            }
+                        };
+                        let (tn_x, tf_x) = slabs(0);
+                        let (tn_y, tf_y) = slabs(1);
+                        let (tn_z, tf_z) = slabs(2);
+                        let tnear = _mm512_max_ps(
+                            _mm512_max_ps(_mm512_max_ps(tn_x, tn_y), tn_z),
+                            _mm512_setzero_ps(),
+                        );
+                        let tfar = _mm512_mul_ps(
+                            _mm512_min_ps(
+                                _mm512_min_ps(_mm512_min_ps(tf_x, tf_y), tf_z),
+                                l16.t_max,
+                            ),
+                            _mm512_set1_ps(1.0 + 2.0 * gamma(3)),
+                        );
+                        let enter = _mm512_cmp_ps_mask::<_CMP_LE_OQ>(tnear, tfar);
+                        enter as u32 & mask
                     } else {
                         // Per axis, the entry and exit distance of each lane: its near and far
                         // slab times its 1/d. In a coherent packet `rel` holds them already; else
