@@ -315,14 +315,9 @@ impl Kind for Prims {
 }
 
 /// Bounds of the primitives and of their (doubled) centroids.
+#[inline]
 fn bounds_of(refs: &[PrimRef]) -> (Aabb, Aabb) {
-    let mut b = Aabb::EMPTY;
-    let mut cb = Aabb::EMPTY;
-    for r in refs {
-        b.min = b.min.min(r.lo());
-        b.max = b.max.max(r.hi());
-        cb.grow_point(r.c2());
-    }
+    let (b, cb, _) = bounds_weight_of(refs, |_| 0);
     (b, cb)
 }
 
