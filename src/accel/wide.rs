@@ -347,8 +347,9 @@ impl Collapse<'_> {
             top[w].child[slot] = base as ChildRef;
             let (here, next) = std::mem::take(&mut rest).split_at_mut(sub.len());
             rest = next;
+            let len = sub.len();
             jobs.push((sub, here, base as u32));
-            base += jobs.last().unwrap().0.len();
+            base += len;
         }
         jobs.into_par_iter().for_each(|(sub, here, base)| {
             for (o, mut n) in here.iter_mut().zip(sub) {

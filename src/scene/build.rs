@@ -69,30 +69,23 @@ impl Scene {
                     }
                     let vertex = |i: u32| Vec3A::from(mesh.positions[i as usize]);
                     // Degenerate triangles can never be hit and cannot emit; drop them. (The
-                    // common case, none, keeps the mesh's own array when it is the first.)
+                    // first mesh, without any, keeps its own array: no copy.)
                     let has_area = |idx: &[u32; 3]| {
                         let [a, b, c] = idx.map(vertex);
                         Triangle::new(a, b, c).has_area()
                     };
-                    let kept: Vec<[u32; 3]> =
-                        if !mesh.indices.par_iter().with_min_len(1 << 12).all(has_area) {
-                            mesh.indices
-                                .par_iter()
-                                .with_min_len(1 << 12)
-                                .filter(|idx| has_area(idx))
-                                .map(|idx| idx.map(|i| i + base))
-                                .collect()
-                        } else if base == 0 {
-                            mesh.indices
-                        } else {
-                            let mut v = huge_pages::with_capacity(mesh.indices.len());
-                            mesh.indices
-                                .par_iter()
-                                .with_min_len(1 << 12)
-                                .map(|idx| idx.map(|i| i + base))
-                                .collect_into_vec(&mut v);
-                            v
-                        };
+                    let kept: Vec<[u32; 3]> = if base == 0
+                        && mesh.indices.par_iter().with_min_len(1 << 12).all(has_area)
+                    {
+                        mesh.indices
+                    } else {
+                        mesh.indices
+                            .par_iter()
+                            .with_min_len(1 << 12)
+                            .filter(|idx| has_area(idx))
+                            .map(|idx| idx.map(|i| i + base))
+                            .collect()
+                    };
                     if let Some(e) = emission {
                         let kept_tris: Vec<Triangle> = kept
                             .iter()
@@ -189,23 +182,11 @@ impl Scene {
         times.mark("bounds");
         let bvh = bvh::build(refs, &mut times);
         let order = &bvh.order;
-        let mut reordered = huge_pages::with_capacity(tris.len());
-        order
-            .par_iter()
-            .with_min_len(1 << 12)
-            .map(|&i| tris[i as usize])
-            .collect_into_vec(&mut reordered);
-        let tris: Vec<[u32; 3]> = reordered;
+        let tris = permuted(&tris, order);
         times.mark("reorder");
         let wide = WideBvh::from_binary(&bvh);
         times.mark("4-wide collapse");
-        let mut reordered = huge_pages::with_capacity(meta.len());
-        order
-            .par_iter()
-            .with_min_len(1 << 12)
-            .map(|&i| meta[i as usize])
-            .collect_into_vec(&mut reordered);
-        let meta: Vec<u32> = reordered;
+        let meta = permuted(&meta, order);
         // `emitting` is sorted by primitive.
         let emitters = if emitting.is_empty() {
             Vec::new()
@@ -272,4 +253,15 @@ fn mesh_lights(
         }
     }
     ids.into_iter()
+}
+
+/// `v` in the BVH's `order` (item i is `v[order[i]]`).
+fn permuted<T: Copy + Send + Sync>(v: &[T], order: &[u32]) -> Vec<T> {
+    let mut out = huge_pages::with_capacity(order.len());
+    order
+        .par_iter()
+        .with_min_len(1 << 12)
+        .map(|&i| v[i as usize])
+        .collect_into_vec(&mut out);
+    out
 }

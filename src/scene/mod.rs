@@ -308,58 +308,56 @@ impl Scene {
     /// The lanes of `lanes` whose rays primitive `i` blocks.
     #[inline(always)]
     fn packet_hits(&self, pk: &ShadowPacket, i: usize, lanes: u32) -> u32 {
-        {
-            let each = |mut m: u32, hit: &dyn Fn(usize) -> bool| {
-                let mut hits = 0;
-                while m != 0 {
-                    let lane = m.trailing_zeros() as usize;
-                    m &= m - 1;
-                    hits |= (hit(lane) as u32) << lane;
-                }
-                hits
-            };
-            // SAFETY: the BVH's leaves name primitives below tris.len() (Scene::build).
-            let [a, b, c] = unsafe { *self.tris.get_unchecked(i) };
-            if lanes & (lanes - 1) == 0 {
-                return each(lanes, &|l| self.hit(&pk.ray(l), i, pk.t_max[l]).is_some());
-            }
-            // Several rays: four at a time (for a triangle, those near an edge one by one).
-            let four = |h: usize| {
-                // (Loaded in place: `pk.d.map` would copy the whole arrays first.)
-                let d = std::array::from_fn(|k| Vec4::from_slice(&pk.d[k][h..h + 4]));
-                (d, Vec4::from_slice(&pk.t_max[h..h + 4]))
-            };
+        let each = |mut m: u32, hit: &dyn Fn(usize) -> bool| {
             let mut hits = 0;
-            if a == SPHERE {
-                let sphere = &self.spheres[b as usize];
-                for h in (0..PACKET).step_by(4) {
-                    let m = (lanes >> h) & 15;
-                    if m != 0 {
-                        let (d, t_max) = four(h);
-                        hits |= (sphere.occludes4(pk.o, d, t_max) & m) << h;
-                    }
-                }
-                return hits;
-            }
-            let tri = Triangle::new(
-                self.vertex_fast(a),
-                self.vertex_fast(b),
-                self.vertex_fast(c),
-            );
-            for h in (0..PACKET).step_by(4) {
-                let m = (lanes >> h) & 15;
-                if m == 0 {
-                    continue;
-                }
-                let (d, t_max) = four(h);
-                let (hit, unsure) = tri.occludes4(pk.o, d, t_max);
-                hits |= (hit & m) << h;
-                hits |= each((unsure & m) << h, &|l| {
-                    tri.intersect(&pk.ray(l), pk.t_max[l]).is_some()
-                });
+            while m != 0 {
+                let lane = m.trailing_zeros() as usize;
+                m &= m - 1;
+                hits |= (hit(lane) as u32) << lane;
             }
             hits
+        };
+        // SAFETY: the BVH's leaves name primitives below tris.len() (Scene::build).
+        let [a, b, c] = unsafe { *self.tris.get_unchecked(i) };
+        if lanes & (lanes - 1) == 0 {
+            return each(lanes, &|l| self.hit(&pk.ray(l), i, pk.t_max[l]).is_some());
         }
+        // Several rays: four at a time (for a triangle, those near an edge one by one).
+        let four = |h: usize| {
+            // (Loaded in place: `pk.d.map` would copy the whole arrays first.)
+            let d = std::array::from_fn(|k| Vec4::from_slice(&pk.d[k][h..h + 4]));
+            (d, Vec4::from_slice(&pk.t_max[h..h + 4]))
+        };
+        let mut hits = 0;
+        if a == SPHERE {
+            let sphere = &self.spheres[b as usize];
+            for h in (0..PACKET).step_by(4) {
+                let m = (lanes >> h) & 15;
+                if m != 0 {
+                    let (d, t_max) = four(h);
+                    hits |= (sphere.occludes4(pk.o, d, t_max) & m) << h;
+                }
+            }
+            return hits;
+        }
+        let tri = Triangle::new(
+            self.vertex_fast(a),
+            self.vertex_fast(b),
+            self.vertex_fast(c),
+        );
+        for h in (0..PACKET).step_by(4) {
+            let m = (lanes >> h) & 15;
+            if m == 0 {
+                continue;
+            }
+            let (d, t_max) = four(h);
+            let (hit, unsure) = tri.occludes4(pk.o, d, t_max);
+            hits |= (hit & m) << h;
+            hits |= each((unsure & m) << h, &|l| {
+                tri.intersect(&pk.ray(l), pk.t_max[l]).is_some()
+            });
+        }
+        hits
     }
 
     /// Bytes held by the geometry the integrators trace: per-primitive indices and

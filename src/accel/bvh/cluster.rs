@@ -141,8 +141,13 @@ fn run_tree(
     // parent counts the leaves the run would have had, so that it is merged (or not)
     // just as before.
     if n <= 3
-        && merges(n as u32, n as u32, false, bounds, merge_weight)
-        && !prims.iter().any(PrimRef::costly)
+        && merges(
+            n as u32,
+            n as u32,
+            prims.iter().any(PrimRef::costly),
+            bounds,
+            merge_weight,
+        )
     {
         let _ = Prims.leaf(nodes, order, prims, first, depth, bounds);
         return Sub {

@@ -163,9 +163,9 @@ mod avx {
         };
         let c = c.unwrap_or_else(Coherent::none);
         match (kind, wide) {
-            (COHERENT, false) => traverse::<COHERENT, F>(bvh, &lanes, pk, &c, active, hit),
-            (FINITE, false) => traverse::<FINITE, F>(bvh, &lanes, pk, &c, active, hit),
-            (_, false) => traverse::<ANY, F>(bvh, &lanes, pk, &c, active, hit),
+            (COHERENT, false) => traverse::<COHERENT, F>(bvh, &lanes, &c, active, hit),
+            (FINITE, false) => traverse::<FINITE, F>(bvh, &lanes, &c, active, hit),
+            (_, false) => traverse::<ANY, F>(bvh, &lanes, &c, active, hit),
             (COHERENT, true) => traverse16::<COHERENT, F>(bvh, &lanes, pk, &c, active, hit),
             (FINITE, true) => traverse16::<FINITE, F>(bvh, &lanes, pk, &c, active, hit),
             (_, true) => traverse16::<ANY, F>(bvh, &lanes, pk, &c, active, hit),
@@ -177,7 +177,6 @@ mod avx {
     unsafe fn traverse<const KIND: u8, F: FnMut(usize, u32) -> u32>(
         bvh: &WideBvh,
         l: &Lanes,
-        _pk: &ShadowPacket,
         coh: &Coherent,
         active: u32,
         hit: &mut F,
