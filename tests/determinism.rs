@@ -133,3 +133,33 @@ fn two_passes_equal_one() {
         );
     }
 }
+
+/// The integrator compiled for x86-64-v3, which `integrator::li` chooses at run time where
+/// the CPU has AVX2 and FMA, gives the portable code's film bit for bit: the TNCG15 room with
+/// ten shadow rays (the packets and the planar light batch) and the Cornell box with one
+/// (single shadow rays, one-sided BSDFs). On a CPU without those features both are the
+/// portable code, and the test checks nothing new.
+#[test]
+fn same_image_with_and_without_the_x86_64_v3_path() {
+    use mcrt::integrator::RayStats;
+    use mcrt::render::render_samples_with;
+    use mcrt::sampler::Sampler;
+    for (file, shadow_rays) in [("scenes/tncg15.toml", 10), ("scenes/cornell-box.toml", 1)] {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(file);
+        let scene = Scene::build(mcrt::load_scene(&path).unwrap());
+        let mut s = settings(&scene, IntegratorKind::Path, 5, Some(2));
+        s.params.shadow_rays = shadow_rays;
+        let mut chosen = Film::new(SIZE, SIZE);
+        render_samples(&scene, &s, &mut chosen, 0, SPP, &|_| {}).unwrap();
+        let portable = |ray, sampler: &mut Sampler, stats: &mut RayStats| {
+            mcrt::integrator::li_portable(&scene, ray, sampler, &s.params, stats)
+        };
+        let mut other = Film::new(SIZE, SIZE);
+        render_samples_with(&scene, &s, &mut other, 0, SPP, &|_| {}, &portable).unwrap();
+        assert_lit(&chosen);
+        assert!(
+            bits(&chosen.sum) == bits(&other.sum) && bits(&chosen.sum_sq) == bits(&other.sum_sq),
+            "{file}: the x86-64-v3 code's film differs from the portable code's"
+        );
+    }
+}

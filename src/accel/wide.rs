@@ -178,7 +178,7 @@ impl WideBvh {
     /// Children are visited nearest entry first, and the stack keeps each postponed child's
     /// entry distance: one popped after a hit nearer than its box is dropped unopened, so a
     /// wall behind the hit costs no node or triangle tests (Wald et al. 2008 do the same).
-    #[inline]
+    #[inline(always)]
     pub fn intersect<F: FnMut(usize, f32) -> Option<f32>>(
         &self,
         ray: &Ray,
@@ -266,7 +266,7 @@ impl WideBvh {
 
     /// Any hit before `t_max`. Order does not matter here: the first hit child is visited
     /// next and the others are pushed as they come.
-    #[inline]
+    #[inline(always)]
     pub fn occluded<F: FnMut(usize, f32) -> bool>(
         &self,
         ray: &Ray,

@@ -55,7 +55,7 @@ fn unit(x: u32) -> f32 {
 }
 
 /// Next-event estimation at `si`: the direct light, weighted by MIS, divided by `n`.
-#[inline]
+#[inline(always)]
 #[allow(clippy::too_many_arguments)] // the hot path: plain arguments, no context struct
 pub(crate) fn sample_lights(
     scene: &Scene,
@@ -102,7 +102,7 @@ pub(crate) fn sample_lights(
 /// One light sample (`n` = 1, the default): `any_lights` without its batch, its lattice and
 /// its packets, which cost a vertex about a fifth of its light sampling (callgrind, Cornell
 /// box). The sample is `any_lights`'s first, so the result is the same.
-#[inline]
+#[inline(always)]
 fn one_sample(
     scene: &Scene,
     si: &Interaction,

@@ -8,6 +8,7 @@ use crate::sampler::Sampler;
 use crate::scene::Scene;
 use crate::Color;
 
+#[inline(always)]
 pub fn li(
     scene: &Scene,
     mut ray: Ray,

@@ -194,7 +194,7 @@ impl Material {
 
     /// f(wo, wi) for radiance transport and the pdf of sampling `wi`, with one orientation
     /// test and one match: what next-event estimation needs for each shadow ray.
-    #[inline]
+    #[inline(always)]
     pub fn eval_pdf(&self, wo: Vec3A, wi: Vec3A) -> (Color, f32) {
         if let Bsdf::RoughDielectric(b) = &self.bsdf {
             return (b.eval(wo, wi, TransportMode::Radiance), b.pdf(wo, wi));
@@ -234,7 +234,7 @@ impl Material {
     }
 
     /// Samples wi. `u1` picks among lobes (reflection or refraction), `u2` the direction.
-    #[inline]
+    #[inline(always)]
     pub fn sample(&self, wo: Vec3A, u1: f32, u2: Vec2, mode: TransportMode) -> Option<BsdfSample> {
         let s = self.orient(wo)?;
         let flip = Vec3A::new(1.0, 1.0, s);

@@ -175,10 +175,10 @@ impl Scene {
     }
 
     /// Closest hit along the ray, if any.
-    #[inline]
+    #[inline(always)]
     pub fn intersect(&self, ray: &Ray) -> Option<Interaction> {
         let mut best = (usize::MAX, 0.0f32, 0.0f32, 0.0f32);
-        let found = self.bvh.intersect(ray, f32::INFINITY, |i, t_max| {
+        let found = self.bvh.intersect(ray, f32::INFINITY, #[inline(always)] |i, t_max| {
             self.hit(ray, i, t_max).map(|(t, u, v)| {
                 best = (i, u, v, t);
                 t
@@ -191,7 +191,7 @@ impl Scene {
         Some(self.interaction(ray, i, u, v, t))
     }
 
-    #[inline]
+    #[inline(always)]
     fn interaction(&self, ray: &Ray, i: usize, u: f32, v: f32, t_hit: f32) -> Interaction {
         let idx = self.tris[i];
         let meta = self.meta[i];
@@ -283,10 +283,10 @@ impl Scene {
     }
 
     /// True if anything blocks the ray before parametric distance `t_max`.
-    #[inline]
+    #[inline(always)]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
         self.bvh
-            .occluded(ray, t_max, |i, t_max| self.hit(ray, i, t_max).is_some())
+            .occluded(ray, t_max, #[inline(always)] |i, t_max| self.hit(ray, i, t_max).is_some())
     }
 
     /// The lanes of `active` whose rays are blocked before their `t_max`: the answers of
