@@ -456,6 +456,8 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
             .into());
         }
     }
+    desc.check_limits()
+        .map_err(|e| SceneError::new(&a.scene, None, e))?;
     let scene = Scene::build(desc);
     let load_time = t_load.elapsed();
 
@@ -877,6 +879,8 @@ fn photons(a: PhotonsArgs) -> Result<(), Error> {
     let mut settings = mcrt::resolve_settings(&desc.settings, &over, a.threads)?;
     settings.params.photon = a.photon.params()?;
     mcrt::check_memory(&settings)?;
+    desc.check_limits()
+        .map_err(|e| SceneError::new(&a.scene, None, e))?;
     let scene = Scene::build(desc);
     let s = &settings;
     let maps = mcrt::render::with_threads(s, || {

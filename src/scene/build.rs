@@ -13,6 +13,9 @@ use glam::Vec3A;
 use rayon::prelude::*;
 
 impl Scene {
+    /// The scene the integrators trace, from its description. Panics on a description
+    /// beyond what it can represent; [`SceneDesc::check_limits`] tells those apart first,
+    /// with a message (the CLI checks before it builds).
     pub fn build(mut desc: SceneDesc) -> Scene {
         let mut times = BuildTimes::start();
         // Primitives in the description's order: vertex indices (or a sphere), material and

@@ -70,3 +70,71 @@ pub struct SceneDesc {
     /// Things the loader accepted but rendered differently, one line each with file:line:col.
     pub warnings: Vec<String>,
 }
+
+/// Most primitives (triangles and spheres) a scene may hold: the BVH's leaves name a
+/// primitive in 27 bits.
+pub const MAX_PRIMITIVES: usize = (1 << 27) - 1;
+
+impl SceneDesc {
+    /// What [`crate::scene::Scene::build`] cannot represent, if the scene exceeds it: more
+    /// than [`MAX_PRIMITIVES`] triangles and spheres, vertices past 32-bit indices, or more
+    /// materials than a primitive's 30 bits of material index. (Checked before the build,
+    /// which would otherwise stop on an assertion.)
+    pub fn check_limits(&self) -> Result<(), String> {
+        let (mut prims, mut vertices) = (0usize, 0usize);
+        for s in &self.shapes {
+            match &s.geometry {
+                GeometryDesc::Mesh(m) => {
+                    prims += m.indices.len();
+                    vertices += m.positions.len();
+                }
+                GeometryDesc::Sphere { .. } => prims += 1,
+            }
+        }
+        check_counts(prims, vertices, self.materials.len())
+    }
+}
+
+/// [`SceneDesc::check_limits`] on the counts.
+fn check_counts(prims: usize, vertices: usize, materials: usize) -> Result<(), String> {
+    if prims > MAX_PRIMITIVES {
+        return Err(format!(
+            "the scene has {prims} triangles and spheres; mcrt renders at most {MAX_PRIMITIVES}"
+        ));
+    }
+    if vertices >= u32::MAX as usize {
+        return Err(format!(
+            "the scene's meshes have {vertices} vertices; mcrt renders at most {}",
+            u32::MAX - 1
+        ));
+    }
+    let most = super::META_MATERIAL as usize;
+    if materials > most {
+        return Err(format!(
+            "the scene has {materials} materials; mcrt renders at most {most}"
+        ));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The limits are those `Scene::build` asserts: the largest scene within them passes,
+    /// one more of anything is refused with a message that names it.
+    #[test]
+    fn limits_are_the_builds() {
+        let most = (
+            MAX_PRIMITIVES,
+            u32::MAX as usize - 1,
+            super::super::META_MATERIAL as usize,
+        );
+        assert_eq!(check_counts(most.0, most.1, most.2), Ok(()));
+        let err = |r: Result<(), String>| r.unwrap_err();
+        assert!(err(check_counts(most.0 + 1, 3, 1)).contains("triangles and spheres"));
+        assert!(err(check_counts(1, most.1 + 1, 1)).contains("vertices"));
+        assert!(err(check_counts(1, 3, most.2 + 1)).contains("materials"));
+        assert_eq!(SceneDesc::default().check_limits(), Ok(()));
+    }
+}

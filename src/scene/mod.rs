@@ -178,12 +178,17 @@ impl Scene {
     #[inline(always)]
     pub fn intersect(&self, ray: &Ray) -> Option<Interaction> {
         let mut best = (usize::MAX, 0.0f32, 0.0f32, 0.0f32);
-        let found = self.bvh.intersect(ray, f32::INFINITY, #[inline(always)] |i, t_max| {
-            self.hit(ray, i, t_max).map(|(t, u, v)| {
-                best = (i, u, v, t);
-                t
-            })
-        });
+        let found = self.bvh.intersect(
+            ray,
+            f32::INFINITY,
+            #[inline(always)]
+            |i, t_max| {
+                self.hit(ray, i, t_max).map(|(t, u, v)| {
+                    best = (i, u, v, t);
+                    t
+                })
+            },
+        );
         if !found {
             return None;
         }
@@ -285,8 +290,12 @@ impl Scene {
     /// True if anything blocks the ray before parametric distance `t_max`.
     #[inline(always)]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
-        self.bvh
-            .occluded(ray, t_max, #[inline(always)] |i, t_max| self.hit(ray, i, t_max).is_some())
+        self.bvh.occluded(
+            ray,
+            t_max,
+            #[inline(always)]
+            |i, t_max| self.hit(ray, i, t_max).is_some(),
+        )
     }
 
     /// The lanes of `active` whose rays are blocked before their `t_max`: the answers of
