@@ -147,7 +147,7 @@ impl RayStats {
 /// `li_v3` inlines) runs as code compiled for them, chosen at run time, so one binary still
 /// runs on any x86-64. The instructions are those of the portable code in VEX form, with
 /// three operands and without the register copies SSE needs, and with the bit-manipulation
-/// instructions for the masks: −10 % of the Cornell box's render time (docs/performance.md).
+/// instructions for the masks: 5–12 % off the Cornell box's render time (docs/performance.md).
 /// The answers are the same bits: Rust lets LLVM fuse no multiply and add into an FMA, nor
 /// reorder any floating-point operation, whatever the target features (the test
 /// `same_image_with_and_without_the_x86_64_v3_path` checks it).
