@@ -1040,3 +1040,107 @@ fn shadow_packets_match_single_rays() {
     eprintln!("packets: {occluded} of {lanes} rays occluded");
     assert!(occluded > lanes / 10 && occluded < lanes * 9 / 10);
 }
+
+// ---------------------------------------------------------------------------------------------
+// Brute force for small scenes against the BVH
+// ---------------------------------------------------------------------------------------------
+
+/// Everything a hit tells shading, as bits.
+fn hit_bits(h: &Option<Interaction>) -> Option<Vec<u32>> {
+    h.map(|h| {
+        let mut v: Vec<u32> = [h.p, h.p_err, h.ng, h.ns]
+            .iter()
+            .flat_map(|x| x.to_array())
+            .chain([h.t, h.uv.x, h.uv.y])
+            .map(f32::to_bits)
+            .collect();
+        v.extend([h.material, h.light]);
+        v
+    })
+}
+
+/// Small scenes trace single rays by brute force where the CPU has AVX (`accel::flat`), and
+/// the answers are the BVH's bit for bit, ties included (both keep, of equally near hits,
+/// the lowest primitive): the example scenes, a box of cubes and spheres, and a doubled
+/// wall (every hit on it a tie). Rays from points inside the scenes' bounds and from points
+/// on their surfaces, each also as a shadow ray ending before and past its hit.
+#[test]
+fn brute_force_and_the_bvh_agree() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut scenes: Vec<(String, SceneDesc)> = ["scenes/cornell-box.toml", "scenes/tncg15.toml"]
+        .iter()
+        .map(|f| (f.to_string(), mcrt::load_scene(&root.join(f)).unwrap()))
+        .collect();
+    let mut r = Rng::new(77);
+    let mut shapes = vec![cube_shape(Vec3::ZERO, 2.0, glam::Mat3::IDENTITY)];
+    for _ in 0..3 {
+        let c = Vec3::from(r.ball());
+        shapes.push(cube_shape(c, 0.3, r.rotation()));
+        shapes.push(sphere_shape(Vec3::from(r.ball()), 0.4));
+    }
+    // Twice the same quad.
+    let quad = || {
+        mesh_shape(
+            vec![
+                Vec3::new(-1.5, -1.5, 0.5),
+                Vec3::new(1.5, -1.5, 0.5),
+                Vec3::new(1.5, 1.5, 0.5),
+                Vec3::new(-1.5, 1.5, 0.5),
+            ],
+            vec![[0, 1, 2], [0, 2, 3]],
+        )
+    };
+    shapes.push(quad());
+    shapes.push(quad());
+    scenes.push((
+        "cubes, spheres and a doubled wall".into(),
+        SceneDesc {
+            materials: vec![material()],
+            shapes,
+            ..Default::default()
+        },
+    ));
+    let mut flat_seen = 0;
+    for (name, desc) in scenes {
+        let brute = Scene::build(desc.clone());
+        flat_seen += brute.is_flat() as u32;
+        let bvh = Scene::build(desc).without_flat();
+        let b = bvh.bvh.bounds().unwrap();
+        let (mut hits, mut blocked) = (0, 0);
+        for i in 0..40_000 {
+            let o = b.min + (b.max - b.min) * Vec3A::new(r.f(), r.f(), r.f());
+            let mut ray = Ray::new(o, r.dir());
+            if i % 2 == 1 {
+                // From the surface the first ray meets, as a bounce leaves it.
+                if let Some(h) = bvh.intersect(&ray) {
+                    let d = r.dir();
+                    ray = h.spawn_ray(if d.dot(h.ng) * ray.d.dot(h.ng) > 0.0 {
+                        -d
+                    } else {
+                        d
+                    });
+                }
+            }
+            let (want, got) = (bvh.intersect(&ray), brute.intersect(&ray));
+            assert_eq!(hit_bits(&got), hit_bits(&want), "{name}, ray {i}: {ray:?}");
+            let t = want.map_or(1e3, |h| h.t) * if i % 3 == 0 { 0.5 } else { 1.5 };
+            let occluded = bvh.occluded(&ray, t);
+            assert_eq!(brute.occluded(&ray, t), occluded, "{name}, ray {i}");
+            hits += want.is_some() as u32;
+            blocked += occluded as u32;
+        }
+        assert!(
+            hits > 20_000 && blocked > 5_000,
+            "{name}: {hits} hits, {blocked} blocked"
+        );
+    }
+    // Brute force is used wherever the CPU has AVX (and only on x86-64).
+    let avx = cfg!(target_arch = "x86_64") && {
+        #[cfg(target_arch = "x86_64")]
+        let has = std::arch::is_x86_feature_detected!("avx");
+        #[cfg(not(target_arch = "x86_64"))]
+        let has = false;
+        has
+    };
+    assert!(!avx || flat_seen >= 2, "brute force in {flat_seen} scenes");
+}

@@ -1,6 +1,8 @@
 //! Acceleration structures: a bounding volume hierarchy over all primitives.
 
 pub mod bvh;
+#[cfg(target_arch = "x86_64")]
+pub mod flat;
 pub(crate) mod huge_pages;
 pub mod timing;
 pub mod wide;

@@ -5,6 +5,8 @@ pub mod mesh;
 pub mod ray;
 pub mod sphere;
 pub mod triangle;
+#[cfg(target_arch = "x86_64")]
+pub mod triangle_block;
 
 pub use frame::Frame;
 pub use ray::Ray;

@@ -189,6 +189,8 @@ impl Scene {
         times.mark("reorder");
         let wide = WideBvh::from_binary(&bvh);
         times.mark("4-wide collapse");
+        #[cfg(target_arch = "x86_64")]
+        let flat = flat(&tris, &positions);
         let meta = permuted(&meta, order);
         // `emitting` is sorted by primitive.
         let emitters = if emitting.is_empty() {
@@ -212,6 +214,8 @@ impl Scene {
             meta,
             positions,
             spheres,
+            #[cfg(target_arch = "x86_64")]
+            flat,
             emitters,
             normals,
             uvs,
@@ -256,6 +260,43 @@ fn mesh_lights(
         }
     }
     ids.into_iter()
+}
+
+/// The brute-force set of a small scene's primitives `tris` (in BVH order), if it is small
+/// enough and the CPU has AVX ([`crate::accel::flat`]).
+#[cfg(target_arch = "x86_64")]
+fn flat(tris: &[[u32; 3]], positions: &[glam::Vec3]) -> Option<Box<crate::accel::flat::Flat>> {
+    use crate::accel::flat::{FLAT_MAX_SPHERES, FLAT_MAX_TRIANGLES};
+    if tris.len() > FLAT_MAX_TRIANGLES + FLAT_MAX_SPHERES {
+        return None;
+    }
+    flat_with(tris, positions, None)
+}
+
+/// The flat set of `tris` with `kernel` (whatever the size, up to the set's capacity), or
+/// the one its size and the CPU choose.
+#[cfg(target_arch = "x86_64")]
+pub(super) fn flat_with(
+    tris: &[[u32; 3]],
+    positions: &[glam::Vec3],
+    kernel: Option<crate::accel::flat::Kernel>,
+) -> Option<Box<crate::accel::flat::Flat>> {
+    use crate::accel::flat::Flat;
+    let vertex = |i: u32| Vec3A::from(positions[i as usize]);
+    let (spheres, triangles): (Vec<_>, Vec<_>) =
+        (0..tris.len() as u32).partition(|&i| tris[i as usize][0] == SPHERE);
+    let triangles: Vec<(u32, Triangle)> = triangles
+        .into_iter()
+        .map(|i| {
+            let [a, b, c] = tris[i as usize];
+            (i, Triangle::new(vertex(a), vertex(b), vertex(c)))
+        })
+        .collect();
+    match kernel {
+        Some(k) => Flat::with_kernel(&triangles, spheres, k),
+        None => Flat::new(&triangles, spheres),
+    }
+    .map(Box::new)
 }
 
 /// `v` in the BVH's `order` (item i is `v[order[i]]`).

@@ -113,6 +113,10 @@ pub struct Scene {
     pub(crate) uvs: Vec<Vec2>,
     pub(crate) attrs: Vec<MeshAttrs>,
     pub bvh: WideBvh,
+    /// The primitives of a small scene for brute-force tests of single rays, where the CPU
+    /// has AVX (see [`crate::accel::flat`]); the packets keep to the BVH.
+    #[cfg(target_arch = "x86_64")]
+    pub(crate) flat: Option<Box<crate::accel::flat::Flat>>,
     pub materials: Vec<Material>,
     pub lights: Lights,
     pub textures: Vec<crate::texture::Texture>,
@@ -177,13 +181,28 @@ impl Scene {
     /// Closest hit along the ray, if any.
     #[inline(always)]
     pub fn intersect(&self, ray: &Ray) -> Option<Interaction> {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(f) = &self.flat {
+            let (i, t, u, v) = f.intersect(
+                ray,
+                f32::INFINITY,
+                #[inline(always)]
+                |i, t_max| self.hit(ray, i, t_max),
+            )?;
+            return Some(self.interaction(ray, i, u, v, t));
+        }
+        // Of equally near hits the lowest primitive, whatever the order the traversal
+        // visits them in (as `accel::flat` finds them): a primitive is tested without a
+        // bound (its tests read `t_max` only to accept their answer), and its hit kept if
+        // nearer than the nearest so far, or as near and lower.
         let mut best = (usize::MAX, 0.0f32, 0.0f32, 0.0f32);
         let found = self.bvh.intersect(
             ray,
             f32::INFINITY,
             #[inline(always)]
             |i, t_max| {
-                self.hit(ray, i, t_max).map(|(t, u, v)| {
+                let (t, u, v) = self.hit(ray, i, f32::INFINITY)?;
+                (t < t_max || (t == t_max && i < best.0)).then(|| {
                     best = (i, u, v, t);
                     t
                 })
@@ -290,6 +309,15 @@ impl Scene {
     /// True if anything blocks the ray before parametric distance `t_max`.
     #[inline(always)]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(f) = &self.flat {
+            return f.occluded(
+                ray,
+                t_max,
+                #[inline(always)]
+                |i, t_max| self.hit(ray, i, t_max),
+            );
+        }
         self.bvh.occluded(
             ray,
             t_max,
@@ -383,6 +411,47 @@ impl Scene {
             + size_of_val(&self.uvs[..])
             + size_of_val(&self.attrs[..])
             + self.bvh.memory_bytes()
+            + self.flat_bytes()
+    }
+
+    fn flat_bytes(&self) -> usize {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(f) = &self.flat {
+            return f.memory_bytes();
+        }
+        0
+    }
+
+    /// Whether single rays are traced by brute force ([`crate::accel::flat`]).
+    #[doc(hidden)]
+    pub fn is_flat(&self) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        return self.flat.is_some();
+        #[cfg(not(target_arch = "x86_64"))]
+        false
+    }
+
+    /// The scene with its single rays traced by brute force with `kernel` whatever its size
+    /// (at most [`crate::accel::flat::FLAT_MAX_SLOTS`] triangles); unchanged where the CPU
+    /// does not run `kernel`. For the tests and benchmarks.
+    #[doc(hidden)]
+    #[cfg(target_arch = "x86_64")]
+    pub fn with_flat_kernel(mut self, kernel: crate::accel::flat::Kernel) -> Scene {
+        if let Some(f) = build::flat_with(&self.tris, &self.positions, Some(kernel)) {
+            self.flat = Some(f);
+        }
+        self
+    }
+
+    /// The scene with its single rays traced through the BVH even where it is small enough
+    /// for brute force: for the tests and benchmarks, which compare both.
+    #[doc(hidden)]
+    pub fn without_flat(mut self) -> Scene {
+        #[cfg(target_arch = "x86_64")]
+        {
+            self.flat = None;
+        }
+        self
     }
 
     /// The material at a hit, its texture (if any) evaluated there.

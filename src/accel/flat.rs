@@ -1,0 +1,655 @@
+//! Brute force for small scenes: every triangle tested against a single ray, sixteen at a
+//! time ([`TriangleBlock`]), and the few spheres one by one. No hierarchy at all.
+//!
+//! Why: in a room of a few dozen triangles the BVH's work per ray is small, but it is
+//! branchy. Each node test and each triangle's early exit is a branch whose outcome varies
+//! from ray to ray, and a misprediction costs more than the arithmetic it skips. The block
+//! loops here have no such branch. `cargo bench --bench flat` (docs/performance.md) timed
+//! the Cornell box's bounce rays at 168 ns a closest hit through the 4-wide BVH and 98 ns
+//! by brute force with AVX-512, and 151 ns with AVX. A path tracer's coherent camera rays
+//! gain less. Brute force grows with the triangle count and the tree does not, so it is
+//! used only up to [`FLAT_MAX_TRIANGLES`] triangles ([`FLAT_MAX_TRIANGLES_AVX`] with AVX
+//! alone) and [`FLAT_MAX_SPHERES`] spheres, on x86-64 CPUs with AVX. The BVH is still
+//! built: the shadow-ray packets trace it.
+//!
+//! The answers are those of the primitives' own tests: the nearest hit, and of equally near
+//! ones the primitive of the lowest index, which is also what the BVH's traversal returns
+//! (`Scene::intersect`). So a scene's image does not depend on whether it is traced by
+//! brute force or through the tree, nor on the kernel the CPU runs (AVX-512 or AVX, which
+//! give the same bits), nor on whether the integrator runs its portable or its x86-64-v3
+//! code.
+
+use crate::geometry::triangle_block::{splat16, splat8, TriangleBlock, LANES};
+use crate::geometry::{Ray, Triangle};
+use std::arch::x86_64::*;
+
+/// Most triangles traced by brute force with AVX-512. `cargo bench --bench flat` found it
+/// faster than the BVH at every size up to this one (docs/performance.md).
+pub const FLAT_MAX_TRIANGLES: usize = 64;
+/// Most triangles traced by brute force with AVX only (two passes of eight lanes a block).
+/// In `cargo bench --bench flat` it beat the BVH by 10 % on the Cornell box's 36 triangles
+/// and by 26 % on the TNCG15 room's 26, but renders of the Cornell box were no faster
+/// (docs/performance.md).
+pub const FLAT_MAX_TRIANGLES_AVX: usize = 32;
+/// Most triangles a flat set can hold: the lanes near an edge are gathered in one 64-bit mask.
+pub const FLAT_MAX_SLOTS: usize = 64;
+/// Most spheres traced by brute force (each costs a test of its own for every ray).
+pub const FLAT_MAX_SPHERES: usize = 4;
+
+/// The SIMD code that tests the blocks: one pass of sixteen lanes, or two of eight.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kernel {
+    Avx512,
+    Avx,
+}
+
+impl Kernel {
+    /// Whether this CPU runs the kernel.
+    pub fn available(self) -> bool {
+        match self {
+            Kernel::Avx512 => std::arch::is_x86_feature_detected!("avx512f"),
+            Kernel::Avx => std::arch::is_x86_feature_detected!("avx"),
+        }
+    }
+}
+
+/// The primitives of a small scene, for brute-force tests of single rays.
+#[derive(Clone, Debug)]
+pub struct Flat {
+    blocks: Vec<TriangleBlock>,
+    /// The scene's primitive index of each triangle, block by block, lane by lane.
+    prims: Vec<u32>,
+    /// The scene's primitive indices of the spheres.
+    spheres: Vec<u32>,
+    kernel: Kernel,
+}
+
+impl Flat {
+    /// The flat set over `triangles` (primitive index and triangle, in the scene's order)
+    /// and `spheres` (primitive indices); None where the scene is too large for brute force
+    /// or the CPU lacks AVX.
+    pub fn new(triangles: &[(u32, Triangle)], spheres: Vec<u32>) -> Option<Flat> {
+        let kernel = detect()?;
+        let most = match kernel {
+            Kernel::Avx512 => FLAT_MAX_TRIANGLES,
+            Kernel::Avx => FLAT_MAX_TRIANGLES_AVX,
+        };
+        if triangles.len() > most || spheres.len() > FLAT_MAX_SPHERES {
+            return None;
+        }
+        Self::with_kernel(triangles, spheres, kernel)
+    }
+
+    /// The flat set with `kernel`, whatever the scene's size (up to [`FLAT_MAX_SLOTS`]
+    /// triangles); None where the CPU does not run `kernel`, or there is nothing to test.
+    pub fn with_kernel(
+        triangles: &[(u32, Triangle)],
+        spheres: Vec<u32>,
+        kernel: Kernel,
+    ) -> Option<Flat> {
+        assert!(triangles.len() <= FLAT_MAX_SLOTS);
+        if !kernel.available() || (triangles.is_empty() && spheres.is_empty()) {
+            return None;
+        }
+        let blocks = triangles
+            .chunks(LANES)
+            .map(|c| TriangleBlock::new(&c.iter().map(|&(_, t)| t).collect::<Vec<_>>()))
+            .collect();
+        Some(Flat {
+            blocks,
+            prims: triangles.iter().map(|&(p, _)| p).collect(),
+            spheres,
+            kernel,
+        })
+    }
+
+    /// Bytes of the blocks and index lists.
+    pub fn memory_bytes(&self) -> usize {
+        std::mem::size_of_val(&self.blocks[..])
+            + std::mem::size_of_val(&self.prims[..])
+            + std::mem::size_of_val(&self.spheres[..])
+    }
+
+    /// The lanes of block `k` that hold triangles.
+    #[inline(always)]
+    fn lanes(&self, k: usize) -> u32 {
+        let n = (self.prims.len() - k * LANES).min(LANES);
+        (1u32 << n) - 1
+    }
+
+    /// The nearest hit before `t_max` as (primitive, t, u, v). `hit(prim, t_max)` is the
+    /// primitive's own test (t, u, v of a hit in (0, t_max)): it decides the spheres and
+    /// the lanes near an edge.
+    #[inline(always)]
+    pub fn intersect<F>(&self, ray: &Ray, t_max: f32, hit: F) -> Option<(usize, f32, f32, f32)>
+    where
+        F: FnMut(usize, f32) -> Option<(f32, f32, f32)>,
+    {
+        // SAFETY: the kernel was chosen for the CPU's features (`detect`).
+        unsafe {
+            match self.kernel {
+                Kernel::Avx512 => self.intersect16(ray, t_max, hit),
+                Kernel::Avx => self.intersect8(ray, t_max, hit),
+            }
+        }
+    }
+
+    /// Whether anything blocks the ray before `t_max`; `hit` as for [`Flat::intersect`].
+    #[inline(always)]
+    pub fn occluded<F>(&self, ray: &Ray, t_max: f32, hit: F) -> bool
+    where
+        F: FnMut(usize, f32) -> Option<(f32, f32, f32)>,
+    {
+        // SAFETY: as above.
+        unsafe {
+            match self.kernel {
+                Kernel::Avx512 => self.occluded16(ray, t_max, hit),
+                Kernel::Avx => self.occluded8(ray, t_max, hit),
+            }
+        }
+    }
+
+    /// The spheres' nearest hit before `t_max`, as (primitive, t, u, v), or
+    /// (`usize::MAX`, `t_max`, 0, 0) where none is hit. (The spheres are listed by
+    /// primitive, so of equally near ones the first is the lowest.)
+    #[inline(always)]
+    fn nearest_sphere<F>(&self, t_max: f32, hit: &mut F) -> (usize, f32, f32, f32)
+    where
+        F: FnMut(usize, f32) -> Option<(f32, f32, f32)>,
+    {
+        let mut best = (usize::MAX, t_max, 0.0, 0.0);
+        for &p in &self.spheres {
+            if let Some((t, u, v)) = hit(p as usize, best.1) {
+                best = (p as usize, t, u, v);
+            }
+        }
+        best
+    }
+
+    /// The triangles' lanes near an edge (bit `16·block + lane` of `unsure`), decided by
+    /// `hit` before `t_max`, against `best`, the nearest clear hit as (slot, t, u, v): the
+    /// nearest of them all, and of equally near ones the first slot.
+    #[inline(always)]
+    fn settle<F>(
+        &self,
+        mut unsure: u64,
+        t_max: f32,
+        mut best: (usize, f32, f32, f32),
+        hit: &mut F,
+    ) -> (usize, f32, f32, f32)
+    where
+        F: FnMut(usize, f32) -> Option<(f32, f32, f32)>,
+    {
+        while unsure != 0 {
+            let slot = unsure.trailing_zeros() as usize;
+            unsure &= unsure - 1;
+            if let Some((t, u, v)) = hit(self.prims[slot] as usize, t_max) {
+                if t < best.1 || (t == best.1 && slot < best.0) {
+                    best = (slot, t, u, v);
+                }
+            }
+        }
+        best
+    }
+
+    /// The bound the triangles' hits must lie below, given the spheres' nearest: one ulp
+    /// past it, so that a triangle exactly as near (of a lower index) is still seen.
+    #[inline(always)]
+    fn triangle_bound(sphere: &(usize, f32, f32, f32), t_max: f32) -> f32 {
+        if sphere.0 == usize::MAX {
+            t_max
+        } else {
+            sphere.1.next_up()
+        }
+    }
+
+    /// The nearest hit of the spheres' and the triangles' (slot `best.0`), of equally near
+    /// ones the lower primitive.
+    #[inline(always)]
+    fn result(
+        &self,
+        sphere: (usize, f32, f32, f32),
+        best: (usize, f32, f32, f32),
+    ) -> Option<(usize, f32, f32, f32)> {
+        if best.0 != usize::MAX {
+            let tri = (self.prims[best.0] as usize, best.1, best.2, best.3);
+            if sphere.0 == usize::MAX || tri.1 < sphere.1 || (tri.1 == sphere.1 && tri.0 < sphere.0)
+            {
+                return Some(tri);
+            }
+        }
+        (sphere.0 != usize::MAX).then_some(sphere)
+    }
+
+    // The block loops below carry no branch on the rays' answers: each lane keeps the
+    // nearest hit it has seen (a later block's only where strictly nearer, so of equal ones
+    // the first), and the lanes are reduced once at the end. Every block's arithmetic is
+    // then independent of the one before, and the CPU overlaps their divisions (the
+    // latency a block waits on) rather than waiting on a mispredicted branch per block.
+
+    /// # Safety
+    /// The CPU must have AVX-512F.
+    // Not inlined: a call per ray costs nothing next to the blocks, and the caller's
+    // hot loop (the path, compiled for x86-64-v3) keeps its registers.
+    #[inline(never)]
+    #[target_feature(enable = "avx,avx512f")]
+    unsafe fn intersect16<F>(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        mut hit: F,
+    ) -> Option<(usize, f32, f32, f32)>
+    where
+        F: FnMut(usize, f32) -> Option<(f32, f32, f32)>,
+    {
+        let sphere = self.nearest_sphere(t_max, &mut hit);
+        let t_max = Self::triangle_bound(&sphere, t_max);
+        let r = splat16(ray);
+        let (mut bt, mut bu, mut bv) = (
+            _mm512_set1_ps(t_max),
+            _mm512_setzero_ps(),
+            _mm512_setzero_ps(),
+        );
+        let mut bslot = _mm512_setzero_si512();
+        let iota = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+        let mut unsure_all = 0u64;
+        for (k, b) in self.blocks.iter().enumerate() {
+            let lanes = self.lanes(k);
+            let (hits, unsure, [t, u, v]) = b.test16(&r, bt);
+            let m = (hits & lanes) as __mmask16;
+            unsure_all |= ((unsure & lanes) as u64) << (LANES * k);
+            bt = _mm512_mask_blend_ps(m, bt, t);
+            bu = _mm512_mask_blend_ps(m, bu, u);
+            bv = _mm512_mask_blend_ps(m, bv, v);
+            let slots = _mm512_add_epi32(iota, _mm512_set1_epi32((LANES * k) as i32));
+            bslot = _mm512_mask_blend_epi32(m, bslot, slots);
+        }
+        let tmin = _mm512_reduce_min_ps(bt);
+        let mut best = (usize::MAX, t_max, 0.0, 0.0);
+        if tmin < t_max {
+            // Of the lanes as near as the nearest, the first slot.
+            let at = _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(bt, _mm512_set1_ps(tmin));
+            let slot = _mm512_mask_reduce_min_epi32(at, bslot) as usize;
+            let (mut u, mut v) = ([0f32; LANES], [0f32; LANES]);
+            _mm512_storeu_ps(u.as_mut_ptr(), bu);
+            _mm512_storeu_ps(v.as_mut_ptr(), bv);
+            best = (slot, tmin, u[slot % LANES], v[slot % LANES]);
+        }
+        if unsure_all != 0 {
+            best = self.settle(unsure_all, t_max, best, &mut hit);
+        }
+        self.result(sphere, best)
+    }
+
+    /// # Safety
+    /// The CPU must have AVX.
+    // Not inlined: a call per ray costs nothing next to the blocks, and the caller's
+    // hot loop (the path, compiled for x86-64-v3) keeps its registers.
+    #[inline(never)]
+    #[target_feature(enable = "avx")]
+    unsafe fn intersect8<F>(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        mut hit: F,
+    ) -> Option<(usize, f32, f32, f32)>
+    where
+        F: FnMut(usize, f32) -> Option<(f32, f32, f32)>,
+    {
+        let sphere = self.nearest_sphere(t_max, &mut hit);
+        let t_max = Self::triangle_bound(&sphere, t_max);
+        let r = splat8(ray);
+        let (mut bt, mut bu, mut bv) = (
+            _mm256_set1_ps(t_max),
+            _mm256_setzero_ps(),
+            _mm256_setzero_ps(),
+        );
+        // Slots as f32 bit patterns, blended as the floats are (AVX has no integer blend).
+        let mut bslot = _mm256_setzero_ps();
+        let mut unsure_all = 0u64;
+        for (k, b) in self.blocks.iter().enumerate() {
+            let lanes = self.lanes(k);
+            for half in 0..2 {
+                let l = (lanes >> (8 * half)) & 0xff;
+                if l == 0 {
+                    break;
+                }
+                let (hits, unsure, [t, u, v]) = b.test8(&r, bt, half);
+                let m = _mm256_and_ps(hits, valid8(LANES * k + 8 * half, self.prims.len()));
+                unsure_all |= ((unsure & l) as u64) << (LANES * k + 8 * half);
+                bt = _mm256_blendv_ps(bt, t, m);
+                bu = _mm256_blendv_ps(bu, u, m);
+                bv = _mm256_blendv_ps(bv, v, m);
+                let first = (LANES * k + 8 * half) as i32;
+                let slots = _mm256_castsi256_ps(_mm256_setr_epi32(
+                    first,
+                    first + 1,
+                    first + 2,
+                    first + 3,
+                    first + 4,
+                    first + 5,
+                    first + 6,
+                    first + 7,
+                ));
+                bslot = _mm256_blendv_ps(bslot, slots, m);
+            }
+        }
+        let (mut t, mut u, mut v, mut s) = ([0f32; 8], [0f32; 8], [0f32; 8], [0f32; 8]);
+        _mm256_storeu_ps(t.as_mut_ptr(), bt);
+        _mm256_storeu_ps(u.as_mut_ptr(), bu);
+        _mm256_storeu_ps(v.as_mut_ptr(), bv);
+        _mm256_storeu_ps(s.as_mut_ptr(), bslot);
+        let mut best = (usize::MAX, t_max, 0.0, 0.0);
+        for l in 0..8 {
+            let slot = s[l].to_bits() as usize;
+            if t[l] < best.1 || (t[l] == best.1 && t[l] < t_max && slot < best.0) {
+                best = (slot, t[l], u[l], v[l]);
+            }
+        }
+        if unsure_all != 0 {
+            best = self.settle(unsure_all, t_max, best, &mut hit);
+        }
+        self.result(sphere, best)
+    }
+
+    /// # Safety
+    /// The CPU must have AVX-512F.
+    // Not inlined: a call per ray costs nothing next to the blocks, and the caller's
+    // hot loop (the path, compiled for x86-64-v3) keeps its registers.
+    #[inline(never)]
+    #[target_feature(enable = "avx,avx512f")]
+    unsafe fn occluded16<F>(&self, ray: &Ray, t_max: f32, mut hit: F) -> bool
+    where
+        F: FnMut(usize, f32) -> Option<(f32, f32, f32)>,
+    {
+        if self
+            .spheres
+            .iter()
+            .any(|&p| hit(p as usize, t_max).is_some())
+        {
+            return true;
+        }
+        let r = splat16(ray);
+        let tm = _mm512_set1_ps(t_max);
+        let (mut any, mut unsure_all) = (0u32, 0u64);
+        for (k, b) in self.blocks.iter().enumerate() {
+            let lanes = self.lanes(k);
+            let (hits, unsure, _) = b.test16(&r, tm);
+            any |= hits & lanes;
+            unsure_all |= ((unsure & lanes) as u64) << (LANES * k);
+        }
+        any != 0 || self.any_unsure(unsure_all, t_max, &mut hit)
+    }
+
+    /// # Safety
+    /// The CPU must have AVX.
+    // Not inlined: a call per ray costs nothing next to the blocks, and the caller's
+    // hot loop (the path, compiled for x86-64-v3) keeps its registers.
+    #[inline(never)]
+    #[target_feature(enable = "avx")]
+    unsafe fn occluded8<F>(&self, ray: &Ray, t_max: f32, mut hit: F) -> bool
+    where
+        F: FnMut(usize, f32) -> Option<(f32, f32, f32)>,
+    {
+        if self
+            .spheres
+            .iter()
+            .any(|&p| hit(p as usize, t_max).is_some())
+        {
+            return true;
+        }
+        let r = splat8(ray);
+        let tm = _mm256_set1_ps(t_max);
+        let (mut any, mut unsure_all) = (0u32, 0u64);
+        for (k, b) in self.blocks.iter().enumerate() {
+            let lanes = self.lanes(k);
+            for half in 0..2 {
+                let l = (lanes >> (8 * half)) & 0xff;
+                if l == 0 {
+                    break;
+                }
+                let (hits, unsure, _) = b.test8(&r, tm, half);
+                any |= _mm256_movemask_ps(hits) as u32 & l;
+                unsure_all |= ((unsure & l) as u64) << (LANES * k + 8 * half);
+            }
+        }
+        any != 0 || self.any_unsure(unsure_all, t_max, &mut hit)
+    }
+
+    /// Whether any of the triangles' lanes near an edge (bit `16·block + lane` of
+    /// `unsure`), decided by `hit`, blocks the ray before `t_max`.
+    #[inline(always)]
+    fn any_unsure<F>(&self, mut unsure: u64, t_max: f32, hit: &mut F) -> bool
+    where
+        F: FnMut(usize, f32) -> Option<(f32, f32, f32)>,
+    {
+        while unsure != 0 {
+            let slot = unsure.trailing_zeros() as usize;
+            unsure &= unsure - 1;
+            if hit(self.prims[slot] as usize, t_max).is_some() {
+                return true;
+            }
+        }
+        false
+    }
+}
+
+/// The lanes of slots `first..first + 8` below `n`, as a vector mask (all ones where so).
+///
+/// # Safety
+/// The CPU must have AVX.
+#[inline]
+#[target_feature(enable = "avx")]
+unsafe fn valid8(first: usize, n: usize) -> __m256 {
+    // (Small integers as floats: exact, and AVX compares floats only.)
+    let slots = _mm256_add_ps(
+        _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0),
+        _mm256_set1_ps(first as f32),
+    );
+    _mm256_cmp_ps::<_CMP_LT_OQ>(slots, _mm256_set1_ps(n as f32))
+}
+
+/// The widest kernel the CPU runs, if any.
+fn detect() -> Option<Kernel> {
+    [Kernel::Avx512, Kernel::Avx]
+        .into_iter()
+        .find(|k| k.available())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Sphere;
+    use glam::Vec3A;
+
+    #[derive(Clone, Copy)]
+    enum Prim {
+        Tri(Triangle),
+        Ball(Sphere),
+    }
+
+    /// The nearest hit by each primitive's own test, in index order, kept only where nearer:
+    /// the answer `Flat` must give.
+    fn reference(prims: &[Prim], ray: &Ray, t_max: f32) -> Option<(usize, f32, f32, f32)> {
+        let mut best: Option<(usize, f32, f32, f32)> = None;
+        for (i, p) in prims.iter().enumerate() {
+            let bound = best.map_or(t_max, |b| b.1);
+            if let Some((t, u, v)) = test(p, ray, bound) {
+                best = Some((i, t, u, v));
+            }
+        }
+        best
+    }
+
+    fn test(p: &Prim, ray: &Ray, t_max: f32) -> Option<(f32, f32, f32)> {
+        match p {
+            Prim::Tri(t) => t.intersect(ray, t_max),
+            Prim::Ball(s) => s.intersect(ray, t_max).map(|t| (t, 0.0, 0.0)),
+        }
+    }
+
+    /// Both kernels against the reference, bit for bit, on sets of up to 64 triangles (a grid
+    /// of coplanar quads, whose shared edges give hits exactly as near as each other, and
+    /// random triangles, some slivers, some twice) with up to four spheres among them, and rays aimed at
+    /// the insides, edges and vertices of triangles and past them.
+    #[test]
+    fn kernels_give_the_primitives_own_answers() {
+        let kernels: Vec<Kernel> = [Kernel::Avx512, Kernel::Avx]
+            .into_iter()
+            .filter(|k| k.available())
+            .collect();
+        if kernels.is_empty() {
+            return;
+        }
+        let mut state = 0x853c_49e6_748f_ea9bu64;
+        let mut r = move || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let (mut hits, mut ties, mut blocked, mut unblocked) = (0, 0, 0, 0);
+        for case in 0..400 {
+            let n = 1 + case % FLAT_MAX_SLOTS;
+            let mut tris = Vec::new();
+            // A grid of k × k quads in the plane z = 0.
+            let k = 1 + case % 4;
+            for (i, j) in (0..k).flat_map(|i| (0..k).map(move |j| (i, j))) {
+                let p =
+                    |a: usize, b: usize| Vec3A::new(a as f32 / k as f32, b as f32 / k as f32, 0.0);
+                tris.push(Triangle::new(p(i, j), p(i + 1, j), p(i + 1, j + 1)));
+                tris.push(Triangle::new(p(i, j), p(i + 1, j + 1), p(i, j + 1)));
+            }
+            // Over the grid, in its plane, a triangle of twice the area 16: with the grid's
+            // quads (of twice the area 1/k², a power of two for k = 1, 2, 4), rays of dyadic
+            // origin and direction give every triangle of the plane exactly the same t, so a
+            // lane near a grid edge ties with the big triangle's lane, far from its edges.
+            if k != 3 {
+                let big = Triangle::new(
+                    Vec3A::new(-1.0, -1.0, 0.0),
+                    Vec3A::new(3.0, -1.0, 0.0),
+                    Vec3A::new(-1.0, 3.0, 0.0),
+                );
+                if case % 2 == 0 {
+                    tris.insert(0, big);
+                } else {
+                    tris.push(big);
+                }
+            }
+            tris.truncate(n);
+            while tris.len() < n {
+                let mut v = || Vec3A::new(r(), r(), r()) * 2.0 - 1.0;
+                let (a, b, c) = (v(), v(), v());
+                tris.push(match tris.len() % 7 {
+                    3 => Triangle::new(a, b, a + (c - a) * 1e-3),
+                    // The same triangle twice (a doubled wall): hits exactly as near, far
+                    // from any edge, in two lanes.
+                    5 => tris[(r() * tris.len() as f32) as usize],
+                    _ => Triangle::new(a, b, c),
+                });
+            }
+            // Spheres at random places in the primitive order.
+            let mut prims: Vec<Prim> = tris.iter().copied().map(Prim::Tri).collect();
+            for _ in 0..case % (FLAT_MAX_SPHERES + 1) {
+                let at = (r() * prims.len() as f32) as usize;
+                let c = Vec3A::new(r(), r(), r()) * 2.0 - 1.0;
+                prims.insert(
+                    at,
+                    Prim::Ball(Sphere {
+                        center: c,
+                        radius: 0.05 + 0.3 * r(),
+                    }),
+                );
+            }
+            let triangles: Vec<(u32, Triangle)> = prims
+                .iter()
+                .enumerate()
+                .filter_map(|(i, p)| match p {
+                    Prim::Tri(t) => Some((i as u32, *t)),
+                    Prim::Ball(_) => None,
+                })
+                .collect();
+            let spheres: Vec<u32> = (0..prims.len() as u32)
+                .filter(|&i| matches!(prims[i as usize], Prim::Ball(_)))
+                .collect();
+            let sets: Vec<Flat> = kernels
+                .iter()
+                .map(|&k| Flat::with_kernel(&triangles, spheres.clone(), k).unwrap())
+                .collect();
+            for ray_case in 0..200 {
+                let aim = tris[(r() * tris.len() as f32) as usize];
+                let (a, b) = (r(), r());
+                let (a, b) = match ray_case % 5 {
+                    0 => (a, 0.0),
+                    1 => (0.0, 0.0),
+                    2 => (a, 1.0 - a),
+                    3 => (a * 1.4 - 0.2, b * 1.4 - 0.2),
+                    _ => (a * 0.5, b * 0.5),
+                };
+                let target = aim.p0 + (aim.p1 - aim.p0) * a + (aim.p2 - aim.p0) * b;
+                let o = Vec3A::new(r(), r(), r()) * 6.0 - 3.0;
+                let ray = if ray_case % 4 == 3 {
+                    // Dyadic, at a point of a grid line (see above).
+                    let q = |x: f32, steps: f32| (x * steps).floor() / steps;
+                    let o = Vec3A::new(
+                        q(r(), 8.0) * 2.0 - 1.0,
+                        q(r(), 8.0) * 2.0 - 1.0,
+                        1.0 + q(r(), 4.0),
+                    );
+                    let line = (r() * (k + 1) as f32).floor() / k as f32;
+                    let along = q(r(), 16.0);
+                    let target = if r() < 0.5 {
+                        Vec3A::new(line, along, 0.0)
+                    } else {
+                        Vec3A::new(along, line, 0.0)
+                    };
+                    Ray::new(o, target - o)
+                } else {
+                    Ray::new(o, target - o)
+                };
+                let t_max = if ray_case % 3 == 0 {
+                    0.5 + r()
+                } else {
+                    f32::INFINITY
+                };
+                let want = reference(&prims, &ray, t_max);
+                let key = |h: Option<(usize, f32, f32, f32)>| {
+                    h.map(|(i, t, u, v)| (i, t.to_bits(), u.to_bits(), v.to_bits()))
+                };
+                if let Some((i, t, ..)) = want {
+                    hits += 1;
+                    ties += prims[i + 1..]
+                        .iter()
+                        .any(|p| test(p, &ray, t.next_up()).is_some_and(|h| h.0 == t))
+                        as u32;
+                }
+                let occluded = prims.iter().any(|p| test(p, &ray, t_max).is_some());
+                if occluded {
+                    blocked += 1;
+                } else {
+                    unblocked += 1;
+                }
+                for (f, k) in sets.iter().zip(&kernels) {
+                    let hit = |i: usize, t: f32| test(&prims[i], &ray, t);
+                    assert_eq!(
+                        key(f.intersect(&ray, t_max, hit)),
+                        key(want),
+                        "{k:?}, case {case}, ray {ray_case}"
+                    );
+                    assert_eq!(
+                        f.occluded(&ray, t_max, hit),
+                        occluded,
+                        "{k:?}, case {case}, ray {ray_case}"
+                    );
+                }
+            }
+        }
+        // Each kind of answer came up often enough to have been checked.
+        assert!(
+            hits > 10_000 && blocked > 10_000 && unblocked > 10_000,
+            "{hits} {blocked} {unblocked}"
+        );
+        eprintln!("hits {hits}, ties {ties}");
+        assert!(ties > 50, "only {ties} ties");
+    }
+}
