@@ -1,5 +1,6 @@
 //! Brute force against the BVH for single rays in small scenes (`mcrt::accel::flat`): the
-//! time of a closest hit and of an occlusion test, for rooms of 12 to 128 triangles.
+//! time of a closest hit and of an occlusion test, for the example scenes and for rooms of
+//! 12 to 64 triangles, some with spheres.
 //!
 //!     cargo bench --bench flat
 //!
@@ -189,6 +190,24 @@ fn run() {
         let mut r2 = Pcg32::new(n as u64, 1);
         row(
             &format!("box and {} random triangles, rays from inside", n - 12),
+            &desc,
+            |s| rays_inside(s, Vec3A::splat(-0.9), Vec3A::splat(0.9), RAYS, &mut r2),
+        );
+    }
+    // Spheres: each is tested for every ray by brute force.
+    for k in [1, 2, 4] {
+        let mut desc = room(32, &mut r);
+        for _ in 0..k {
+            let c = Vec3::new(r.next_1d(), r.next_1d(), r.next_1d()) * 1.2 - 0.6;
+            desc.shapes.push(ShapeDesc {
+                geometry: GeometryDesc::Sphere { center: c, radius: 0.1 + 0.2 * r.next_1d() },
+                material: 0,
+                emission: None,
+            });
+        }
+        let mut r2 = Pcg32::new(100 + k as u64, 1);
+        row(
+            &format!("box, 20 random triangles and {k} spheres, rays from inside"),
             &desc,
             |s| rays_inside(s, Vec3A::splat(-0.9), Vec3A::splat(0.9), RAYS, &mut r2),
         );
