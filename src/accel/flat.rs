@@ -13,11 +13,14 @@
 //! built: the shadow-ray packets trace it.
 //!
 //! The answers are those of the primitives' own tests: the nearest hit, and of equally near
-//! ones the primitive of the lowest index, which is also what the BVH's traversal returns
-//! (`Scene::intersect`). So a scene's image does not depend on whether it is traced by
-//! brute force or through the tree, nor on the kernel the CPU runs (AVX-512 or AVX, which
-//! give the same bits), nor on whether the integrator runs its portable or its x86-64-v3
-//! code.
+//! ones the primitive of the lowest index. The BVH's traversal keeps the same rule
+//! (`Scene::intersect`), so both give the same hits. The one exception is that the tree
+//! never tests a primitive whose box its conservative box test rules out. That happens
+//! only where the f32 test's t for a grazing ray lies farther out than the widened box
+//! allows, and only when it would have been the nearest hit. The images are therefore the
+//! same bits whichever of the two traces them (`tests/intersect.rs` compares every hit of
+//! the example scenes both ways), whichever kernel the CPU runs (AVX-512 or AVX, which give
+//! the same bits), and whether the integrator runs its portable or its x86-64-v3 code.
 
 use crate::geometry::triangle_block::{splat16, splat8, TriangleBlock, LANES};
 use crate::geometry::{Ray, Triangle};
@@ -485,6 +488,83 @@ mod tests {
         match p {
             Prim::Tri(t) => t.intersect(ray, t_max),
             Prim::Ball(s) => s.intersect(ray, t_max).map(|t| (t, 0.0, 0.0)),
+        }
+    }
+
+    /// A sphere and two triangles hit at exactly the same distance, in every order of the
+    /// three (the ray along +z from the origin meets the sphere and both triangles at t = 1
+    /// exactly; it runs along an edge of the second triangle, whose lane is then left to
+    /// its own test): the lowest primitive wins, and nothing counts at or beyond `t_max`.
+    #[test]
+    fn spheres_and_triangles_tie_by_index() {
+        let ray = Ray::new(Vec3A::ZERO, Vec3A::Z);
+        let sphere = Prim::Ball(Sphere {
+            center: Vec3A::new(0.0, 0.0, 2.0),
+            radius: 1.0,
+        });
+        let v = |x: f32, y: f32| Vec3A::new(x, y, 1.0);
+        let big = Prim::Tri(Triangle::new(v(-4.0, -4.0), v(4.0, -4.0), v(0.0, 4.0)));
+        let edge = Prim::Tri(Triangle::new(v(0.0, -1.0), v(0.0, 1.0), v(2.0, 0.0)));
+        for p in [&sphere, &big, &edge] {
+            assert_eq!(
+                test(p, &ray, f32::INFINITY).map(|h| h.0),
+                Some(1.0),
+                "not a tie"
+            );
+        }
+        let orders = [
+            [0, 1, 2],
+            [0, 2, 1],
+            [1, 0, 2],
+            [1, 2, 0],
+            [2, 0, 1],
+            [2, 1, 0],
+        ];
+        for order in orders {
+            // The three among filler triangles far off the ray.
+            let far = |k: f32| {
+                Prim::Tri(Triangle::new(
+                    v(10.0 + k, 10.0),
+                    v(11.0 + k, 10.0),
+                    v(10.0 + k, 11.0),
+                ))
+            };
+            let mut prims = vec![far(0.0), far(2.0)];
+            for (slot, &which) in order.iter().enumerate() {
+                prims.insert(2 * slot, [sphere, big, edge][which]);
+            }
+            let triangles: Vec<(u32, Triangle)> = prims
+                .iter()
+                .enumerate()
+                .filter_map(|(i, p)| match p {
+                    Prim::Tri(t) => Some((i as u32, *t)),
+                    Prim::Ball(_) => None,
+                })
+                .collect();
+            let spheres: Vec<u32> = (0..prims.len() as u32)
+                .filter(|&i| matches!(prims[i as usize], Prim::Ball(_)))
+                .collect();
+            for k in [Kernel::Avx512, Kernel::Avx]
+                .into_iter()
+                .filter(|k| k.available())
+            {
+                let f = Flat::with_kernel(&triangles, spheres.clone(), k).unwrap();
+                for t_max in [f32::INFINITY, 2.0, 1.0f32.next_up(), 1.0] {
+                    let hit = |i: usize, t: f32| test(&prims[i], &ray, t);
+                    let got = f.intersect(&ray, t_max, hit).map(|h| (h.0, h.1));
+                    let want = (t_max > 1.0).then(|| {
+                        (
+                            prims
+                                .iter()
+                                .position(|p| test(p, &ray, t_max).is_some())
+                                .unwrap(),
+                            1.0,
+                        )
+                    });
+                    assert_eq!(got, want, "{k:?}, order {order:?}, t_max {t_max}");
+                    assert_eq!(f.occluded(&ray, t_max, hit), t_max > 1.0);
+                }
+            }
         }
     }
 

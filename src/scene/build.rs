@@ -273,8 +273,9 @@ fn flat(tris: &[[u32; 3]], positions: &[glam::Vec3]) -> Option<Box<crate::accel:
     flat_with(tris, positions, None)
 }
 
-/// The flat set of `tris` with `kernel` (whatever the size, up to the set's capacity), or
-/// the one its size and the CPU choose.
+/// The flat set of `tris` with `kernel` (whatever the size, up to the set's capacity of
+/// [`crate::accel::flat::FLAT_MAX_SLOTS`] triangles; None beyond it), or the one its size
+/// and the CPU choose.
 #[cfg(target_arch = "x86_64")]
 pub(super) fn flat_with(
     tris: &[[u32; 3]],
@@ -292,6 +293,9 @@ pub(super) fn flat_with(
             (i, Triangle::new(vertex(a), vertex(b), vertex(c)))
         })
         .collect();
+    if triangles.len() > crate::accel::flat::FLAT_MAX_SLOTS {
+        return None;
+    }
     match kernel {
         Some(k) => Flat::with_kernel(&triangles, spheres, k),
         None => Flat::new(&triangles, spheres),

@@ -431,9 +431,9 @@ impl Scene {
         false
     }
 
-    /// The scene with its single rays traced by brute force with `kernel` whatever its size
-    /// (at most [`crate::accel::flat::FLAT_MAX_SLOTS`] triangles); unchanged where the CPU
-    /// does not run `kernel`. For the tests and benchmarks.
+    /// The scene with its single rays traced by brute force with `kernel` whatever its size;
+    /// unchanged where it has more than [`crate::accel::flat::FLAT_MAX_SLOTS`] triangles or
+    /// the CPU does not run `kernel`. For the tests and benchmarks.
     #[doc(hidden)]
     #[cfg(target_arch = "x86_64")]
     pub fn with_flat_kernel(mut self, kernel: crate::accel::flat::Kernel) -> Scene {
