@@ -200,7 +200,10 @@ fn run() {
         for _ in 0..k {
             let c = Vec3::new(r.next_1d(), r.next_1d(), r.next_1d()) * 1.2 - 0.6;
             desc.shapes.push(ShapeDesc {
-                geometry: GeometryDesc::Sphere { center: c, radius: 0.1 + 0.2 * r.next_1d() },
+                geometry: GeometryDesc::Sphere {
+                    center: c,
+                    radius: 0.1 + 0.2 * r.next_1d(),
+                },
                 material: 0,
                 emission: None,
             });
