@@ -259,7 +259,9 @@ impl Flat {
         for (k, b) in self.blocks.iter().enumerate() {
             let lanes = self.lanes(k);
             let (hits, unsure, [t, u, v]) = b.test16(&r, bt);
-            let m = (hits & lanes) as __mmask16;
+            // (Lanes past the last triangle hold NaN and are never hit; only their
+            // `unsure` bits need masking.)
+            let m = hits as __mmask16;
             unsure_all |= ((unsure & lanes) as u64) << (LANES * k);
             bt = _mm512_mask_blend_ps(m, bt, t);
             bu = _mm512_mask_blend_ps(m, bu, u);
@@ -318,7 +320,7 @@ impl Flat {
                     break;
                 }
                 let (hits, unsure, [t, u, v]) = b.test8(&r, bt, half);
-                let m = _mm256_and_ps(hits, valid8(LANES * k + 8 * half, self.prims.len()));
+                let m = hits; // (NaN lanes past the last triangle are never hit.)
                 unsure_all |= ((unsure & l) as u64) << (LANES * k + 8 * half);
                 bt = _mm256_blendv_ps(bt, t, m);
                 bu = _mm256_blendv_ps(bu, u, m);
@@ -378,7 +380,7 @@ impl Flat {
         for (k, b) in self.blocks.iter().enumerate() {
             let lanes = self.lanes(k);
             let (hits, unsure, _) = b.test16(&r, tm);
-            any |= hits & lanes;
+            any |= hits;
             unsure_all |= ((unsure & lanes) as u64) << (LANES * k);
         }
         any != 0 || self.any_unsure(unsure_all, t_max, &mut hit)
@@ -412,7 +414,7 @@ impl Flat {
                     break;
                 }
                 let (hits, unsure, _) = b.test8(&r, tm, half);
-                any |= _mm256_movemask_ps(hits) as u32 & l;
+                any |= _mm256_movemask_ps(hits) as u32;
                 unsure_all |= ((unsure & l) as u64) << (LANES * k + 8 * half);
             }
         }
@@ -435,21 +437,6 @@ impl Flat {
         }
         false
     }
-}
-
-/// The lanes of slots `first..first + 8` below `n`, as a vector mask (all ones where so).
-///
-/// # Safety
-/// The CPU must have AVX.
-#[inline]
-#[target_feature(enable = "avx")]
-unsafe fn valid8(first: usize, n: usize) -> __m256 {
-    // (Small integers as floats: exact, and AVX compares floats only.)
-    let slots = _mm256_add_ps(
-        _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0),
-        _mm256_set1_ps(first as f32),
-    );
-    _mm256_cmp_ps::<_CMP_LT_OQ>(slots, _mm256_set1_ps(n as f32))
 }
 
 /// The widest kernel the CPU runs, if any.
