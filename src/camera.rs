@@ -56,16 +56,16 @@ pub enum CameraDesc {
 
 #[derive(Clone, Copy, Debug)]
 pub struct Camera {
-    eye: Vec3A,
-    tl: Vec3A,
+    pub(crate) eye: Vec3A,
+    pub(crate) tl: Vec3A,
     /// top_right − top_left
-    right: Vec3A,
+    pub(crate) right: Vec3A,
     /// bottom_left − top_left
-    down: Vec3A,
+    pub(crate) down: Vec3A,
     /// Bilinear twist: bottom_right − bottom_left − right (zero for a parallelogram).
-    twist: Vec3A,
-    width: u32,
-    height: u32,
+    pub(crate) twist: Vec3A,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
 }
 
 impl CameraDesc {

@@ -112,7 +112,17 @@ pub fn render_samples(
     let li = |ray: Ray, sampler: &mut Sampler, stats: &mut RayStats| {
         integrator::li(scene, ray, sampler, &s.params, stats)
     };
-    render_samples_with(scene, s, film, first, count, progress, &li)
+    let mut next = vec![first; film.count.len()];
+    render_tiles(
+        scene,
+        s,
+        film,
+        &mut next,
+        &|_| first + count,
+        &|| false,
+        progress,
+        &Tracer::new(scene, s, &li),
+    )
 }
 
 /// [`render_samples`] with the radiance given by `li`.
@@ -126,7 +136,7 @@ pub fn render_samples_with(
     li: &LiFn,
 ) -> Result<RenderStats, RenderError> {
     let mut next = vec![first; film.count.len()];
-    render_ranges_with(
+    render_tiles(
         scene,
         s,
         film,
@@ -134,7 +144,7 @@ pub fn render_samples_with(
         &|_| first + count,
         &|| false,
         progress,
-        li,
+        &Tracer::per_sample(li),
     )
 }
 
@@ -175,7 +185,87 @@ pub fn render_ranges(
     let li = |ray: Ray, sampler: &mut Sampler, stats: &mut RayStats| {
         integrator::li(scene, ray, sampler, &s.params, stats)
     };
-    render_ranges_with(scene, s, film, next, until, stop, progress, &li)
+    render_tiles(
+        scene,
+        s,
+        film,
+        next,
+        until,
+        stop,
+        progress,
+        &Tracer::new(scene, s, &li),
+    )
+}
+
+/// How a tile's samples are rendered: one at a time by `li`, or sixteen paths at a time by
+/// the path tracer's wavefront where the scene, the settings and the CPU allow (the same
+/// values either way; see [`crate::integrator::wavefront`]).
+struct Tracer<'a> {
+    li: &'a LiFn<'a>,
+    #[cfg(target_arch = "x86_64")]
+    wavefront: Option<crate::integrator::wavefront::Wavefront<'a>>,
+}
+
+impl<'a> Tracer<'a> {
+    /// `li` is the path tracer's: the wavefront may stand in for it.
+    fn new(scene: &'a Scene, s: &RenderSettings, li: &'a LiFn<'a>) -> Tracer<'a> {
+        Tracer {
+            li,
+            #[cfg(target_arch = "x86_64")]
+            wavefront: crate::integrator::wavefront::Wavefront::new(scene, s),
+        }
+    }
+
+    /// Any `li` one sample at a time.
+    fn per_sample(li: &'a LiFn<'a>) -> Tracer<'a> {
+        Tracer {
+            li,
+            #[cfg(target_arch = "x86_64")]
+            wavefront: None,
+        }
+    }
+
+    /// Renders the samples of a tile's pixels into their sums (`sums[k]` for `pixels[k]`).
+    fn render_tile(
+        &self,
+        s: &RenderSettings,
+        camera: &crate::camera::Camera,
+        pixels: &[TilePixel],
+        sums: &mut [PixelSums],
+        stats: &mut RenderStats,
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(w) = &self.wavefront {
+            return w.render_tile(camera, pixels, sums, stats);
+        }
+        for (p, px) in pixels.iter().zip(sums) {
+            // Random numbers follow the pixel of the full image, so a crop renders the same
+            // values as the whole image does there.
+            let pixel = p.gy as u64 * s.width as u64 + p.gx as u64;
+            for i in p.samples.0..p.samples.1 {
+                let mut sampler = Sampler::for_sample(s.sampler, s.seed, pixel, i as u64);
+                let ray = camera.generate_ray(p.gx, p.gy, sampler.next_2d());
+                let l = (self.li)(ray, &mut sampler, &mut stats.rays);
+                if l.is_finite() {
+                    px.add(l);
+                } else {
+                    stats.dropped += 1;
+                    stats.first_dropped.get_or_insert((p.x, p.y));
+                }
+            }
+        }
+    }
+}
+
+/// A pixel of a tile: its coordinates in the film and in the full image, and the samples
+/// to render (indices `samples.0..samples.1`).
+#[derive(Clone, Copy, Debug)]
+pub struct TilePixel {
+    pub x: u32,
+    pub y: u32,
+    pub gx: u32,
+    pub gy: u32,
+    pub samples: (u32, u32),
 }
 
 /// [`render_ranges`] with the radiance given by `li`.
@@ -189,6 +279,22 @@ pub fn render_ranges_with(
     stop: &(dyn Fn() -> bool + Sync),
     progress: &(dyn Fn(u64) + Sync),
     li: &LiFn,
+) -> Result<RenderStats, RenderError> {
+    let tracer = Tracer::per_sample(li);
+    render_tiles(scene, s, film, next, until, stop, progress, &tracer)
+}
+
+/// [`render_ranges`]' work: the image's tiles in parallel, each tile's samples by `tracer`.
+#[allow(clippy::too_many_arguments)]
+fn render_tiles(
+    scene: &Scene,
+    s: &RenderSettings,
+    film: &mut Film,
+    next: &mut [u32],
+    until: &(dyn Fn(usize) -> u32 + Sync),
+    stop: &(dyn Fn() -> bool + Sync),
+    progress: &(dyn Fn(u64) + Sync),
+    tracer: &Tracer,
 ) -> Result<RenderStats, RenderError> {
     let camera = camera_for(scene, s)?;
     let (ox, oy, fw, fh) = s.window();
@@ -223,31 +329,19 @@ pub fn render_ranges_with(
                     .unzip()
             };
             let mut stats = RenderStats::default();
-            let mut k = 0;
-            let mut n = 0u64;
-            for y in y0..y1 {
-                for x in x0..x1 {
-                    // Random numbers follow the pixel of the full image, so a crop renders
-                    // the same values as the whole image does there.
-                    let (gx, gy) = (x + ox, y + oy);
-                    let pixel = gy as u64 * s.width as u64 + gx as u64;
-                    let px = &mut sums[k];
-                    let (a, b) = ranges[k];
-                    k += 1;
-                    n += (b - a) as u64;
-                    for i in a..b {
-                        let mut sampler = Sampler::for_sample(s.sampler, s.seed, pixel, i as u64);
-                        let ray = camera.generate_ray(gx, gy, sampler.next_2d());
-                        let l = li(ray, &mut sampler, &mut stats.rays);
-                        if l.is_finite() {
-                            px.add(l);
-                        } else {
-                            stats.dropped += 1;
-                            stats.first_dropped.get_or_insert((x, y));
-                        }
-                    }
-                }
-            }
+            let n: u64 = ranges.iter().map(|&(a, b)| (b - a) as u64).sum();
+            let pixels: Vec<TilePixel> = (y0..y1)
+                .flat_map(|y| (x0..x1).map(move |x| (x, y)))
+                .zip(&ranges)
+                .map(|((x, y), &samples)| TilePixel {
+                    x,
+                    y,
+                    gx: x + ox,
+                    gy: y + oy,
+                    samples,
+                })
+                .collect();
+            tracer.render_tile(s, &camera, &pixels, &mut sums, &mut stats);
             {
                 let mut g = shared.lock().unwrap();
                 let (film, next, total) = &mut *g;

@@ -91,6 +91,13 @@ impl Sampler {
         self.rng.next_u32()
     }
 
+    /// The PCG32 stream's state and increment, for the wavefront's lanes, which continue
+    /// the stream where this sampler would (the independent sampler only).
+    #[inline]
+    pub(crate) fn pcg_words(&self) -> (u64, u64) {
+        (self.rng.state, self.rng.inc)
+    }
+
     /// Uniform in [0, 1).
     #[inline(always)]
     pub fn next_1d(&mut self) -> f32 {

@@ -14,6 +14,8 @@ mod nee;
 pub mod path;
 pub mod photon;
 pub mod sppm;
+#[cfg(target_arch = "x86_64")]
+pub mod wavefront;
 
 use crate::material::sampling::power_heuristic;
 use crate::sampler::Sampler;

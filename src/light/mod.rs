@@ -272,6 +272,12 @@ impl Lights {
         self.lights.is_empty() && self.others.is_empty()
     }
 
+    /// The probability with which `sample` chooses light `id` (as `pdf` weighs it).
+    #[inline]
+    pub(crate) fn pmf(&self, id: usize) -> f32 {
+        self.distribution.pmf(id)
+    }
+
     /// Radiance leaving light `id` at a point with normal `n` in direction `w` (unit).
     #[inline]
     pub fn le(&self, id: u32, n: Vec3A, w: Vec3A) -> Color {

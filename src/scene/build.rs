@@ -226,6 +226,7 @@ impl Scene {
             textures: desc.textures,
             cameras: desc.cameras,
             desc_settings: desc.settings,
+            wavefront_allowed: true,
         }
     }
 }

@@ -124,6 +124,9 @@ pub struct Scene {
     pub desc_settings: desc::FileSettings,
     /// How long each phase of `Scene::build` took.
     pub build_times: crate::accel::BuildTimes,
+    /// Whether the path tracer may run sixteen paths at a time where the scene allows
+    /// ([`crate::integrator::wavefront`]); cleared by [`Scene::without_wavefront`].
+    pub(crate) wavefront_allowed: bool,
 }
 
 impl Scene {
@@ -133,7 +136,7 @@ impl Scene {
     }
 
     #[inline(always)]
-    fn triangle(&self, [a, b, c]: [u32; 3]) -> Triangle {
+    pub(crate) fn triangle(&self, [a, b, c]: [u32; 3]) -> Triangle {
         Triangle::new(self.vertex(a), self.vertex(b), self.vertex(c))
     }
 
@@ -160,7 +163,7 @@ impl Scene {
 
     /// Primitive `i` (BVH order) hit before `t_max`: (t, u, v) (spheres: (t, 0, 0)).
     #[inline(always)]
-    fn hit(&self, ray: &Ray, i: usize, t_max: f32) -> Option<(f32, f32, f32)> {
+    pub(crate) fn hit(&self, ray: &Ray, i: usize, t_max: f32) -> Option<(f32, f32, f32)> {
         debug_assert!(i < self.tris.len());
         // SAFETY: the BVH's leaves name primitives below tris.len() (Scene::build).
         let [a, b, c] = unsafe { *self.tris.get_unchecked(i) };
@@ -451,6 +454,14 @@ impl Scene {
         {
             self.flat = None;
         }
+        self
+    }
+
+    /// The scene with every path traced one at a time (`integrator::path`), even where the
+    /// wavefront would take it: for the tests and benchmarks, which compare both.
+    #[doc(hidden)]
+    pub fn without_wavefront(mut self) -> Scene {
+        self.wavefront_allowed = false;
         self
     }
 

@@ -1,0 +1,418 @@
+//! Sixteen f32 lanes in one AVX-512 register, with the operations the wavefront needs, each
+//! the IEEE operation the scalar code performs on one lane: no FMA, no reciprocal
+//! approximations, sums in the order glam writes them. So a lane computes the bits the scalar
+//! path computes for its path.
+//!
+//! The operator impls are `#[inline(always)]` functions without target features that call
+//! the intrinsics; inlined into the wavefront's `#[target_feature(enable = "avx512f")]`
+//! functions, they become single instructions (they are never called anywhere else: every
+//! value of these types is made inside such a function, on a CPU that has AVX-512).
+
+use std::arch::x86_64::*;
+use std::ops::{Add, BitAnd, Div, Mul, Neg, Sub};
+
+/// A mask of lanes, bit i for lane i.
+pub type M = u16;
+
+/// Sixteen f32 lanes.
+#[derive(Clone, Copy)]
+pub struct F(pub __m512);
+
+/// Sixteen u32 lanes.
+#[derive(Clone, Copy)]
+pub struct U(pub __m512i);
+
+// SAFETY (all the `unsafe` blocks of this module): the intrinsics need AVX-512F (and DQ where
+// noted), which every caller has checked for (see the module comment); they touch no memory
+// but the arrays they are given.
+
+impl F {
+    #[inline(always)]
+    pub fn splat(x: f32) -> F {
+        F(unsafe { _mm512_set1_ps(x) })
+    }
+    #[inline(always)]
+    pub fn zero() -> F {
+        F(unsafe { _mm512_setzero_ps() })
+    }
+    #[inline(always)]
+    pub fn load(a: &[f32; 16]) -> F {
+        F(unsafe { _mm512_loadu_ps(a.as_ptr()) })
+    }
+    #[inline(always)]
+    pub fn store(self, a: &mut [f32; 16]) {
+        unsafe { _mm512_storeu_ps(a.as_mut_ptr(), self.0) }
+    }
+    #[inline(always)]
+    pub fn to_array(self) -> [f32; 16] {
+        let mut a = [0.0; 16];
+        self.store(&mut a);
+        a
+    }
+    #[inline(always)]
+    pub fn sqrt(self) -> F {
+        F(unsafe { _mm512_sqrt_ps(self.0) })
+    }
+    /// |x|: the sign bit cleared, as `f32::abs` and glam's `abs`.
+    #[inline(always)]
+    pub fn abs(self) -> F {
+        F(unsafe {
+            _mm512_castsi512_ps(_mm512_and_si512(
+                _mm512_castps_si512(self.0),
+                _mm512_set1_epi32(0x7fff_ffff),
+            ))
+        })
+    }
+    /// x86's `maxps`: the second operand where either is NaN (glam's SIMD `max`).
+    #[inline(always)]
+    pub fn max_ps(self, o: F) -> F {
+        F(unsafe { _mm512_max_ps(self.0, o.0) })
+    }
+    /// `f32::max` against a number `o` that is not NaN: `o` where `self` is NaN. (Where the
+    /// two are zeros of opposite signs either may come out, as for `f32::max`; no caller
+    /// tells them apart.)
+    #[inline(always)]
+    pub fn max_num(self, o: F) -> F {
+        self.max_ps(o)
+    }
+    /// `f32::min` against a number `o` that is not NaN: `o` where `self` is NaN.
+    #[inline(always)]
+    pub fn min_num(self, o: F) -> F {
+        F(unsafe { _mm512_min_ps(self.0, o.0) })
+    }
+    /// `f32::max` of two numbers either of which may be NaN: the other where one is.
+    #[inline(always)]
+    pub fn max_num2(self, o: F) -> F {
+        // maxps(o, self) is self where either is NaN; where self is, o.
+        let m = F(unsafe { _mm512_max_ps(o.0, self.0) });
+        F::select(self.is_nan(), o, m)
+    }
+    #[inline(always)]
+    pub fn is_nan(self) -> M {
+        unsafe { _mm512_cmp_ps_mask::<_CMP_UNORD_Q>(self.0, self.0) }
+    }
+    /// Lanes where x is finite (neither infinite nor NaN).
+    #[inline(always)]
+    pub fn is_finite(self) -> M {
+        // |x| < ∞ is false for ∞ and NaN.
+        unsafe { _mm512_cmp_ps_mask::<_CMP_LT_OQ>(self.abs().0, _mm512_set1_ps(f32::INFINITY)) }
+    }
+    /// `x < o`, false for NaN.
+    #[inline(always)]
+    pub fn lt(self, o: F) -> M {
+        unsafe { _mm512_cmp_ps_mask::<_CMP_LT_OQ>(self.0, o.0) }
+    }
+    /// `x <= o`, false for NaN.
+    #[inline(always)]
+    pub fn le(self, o: F) -> M {
+        unsafe { _mm512_cmp_ps_mask::<_CMP_LE_OQ>(self.0, o.0) }
+    }
+    /// `x > o`, false for NaN.
+    #[inline(always)]
+    pub fn gt(self, o: F) -> M {
+        unsafe { _mm512_cmp_ps_mask::<_CMP_GT_OQ>(self.0, o.0) }
+    }
+    /// `x >= o`, false for NaN.
+    #[inline(always)]
+    pub fn ge(self, o: F) -> M {
+        unsafe { _mm512_cmp_ps_mask::<_CMP_GE_OQ>(self.0, o.0) }
+    }
+    /// `x == o`, false for NaN.
+    #[inline(always)]
+    pub fn eq(self, o: F) -> M {
+        unsafe { _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(self.0, o.0) }
+    }
+    /// `a` where `m`, else `b`.
+    #[inline(always)]
+    pub fn select(m: M, a: F, b: F) -> F {
+        F(unsafe { _mm512_mask_blend_ps(m, b.0, a.0) })
+    }
+    /// `1.0.copysign(x)`: ±1 with the sign bit of x.
+    #[inline(always)]
+    pub fn sign_of(x: F) -> F {
+        unsafe {
+            let sign = _mm512_and_si512(_mm512_castps_si512(x.0), _mm512_set1_epi32(i32::MIN));
+            F(_mm512_castsi512_ps(_mm512_or_si512(
+                sign,
+                _mm512_set1_epi32(0x3f80_0000),
+            )))
+        }
+    }
+    /// Lane i of `table` for the index in lane i (below 64), by two two-register
+    /// permutations and a blend on the index's bit 5.
+    #[inline(always)]
+    pub fn lookup64(table: &[f32; 64], idx: U) -> F {
+        unsafe {
+            let t: [__m512; 4] =
+                std::array::from_fn(|k| _mm512_loadu_ps(table.as_ptr().add(16 * k)));
+            let lo = _mm512_permutex2var_ps(t[0], idx.0, t[1]);
+            let hi = _mm512_permutex2var_ps(t[2], idx.0, t[3]);
+            let upper = _mm512_test_epi32_mask(idx.0, _mm512_set1_epi32(32));
+            F(_mm512_mask_blend_ps(upper, lo, hi))
+        }
+    }
+}
+
+impl Add for F {
+    type Output = F;
+    #[inline(always)]
+    fn add(self, o: F) -> F {
+        F(unsafe { _mm512_add_ps(self.0, o.0) })
+    }
+}
+impl Sub for F {
+    type Output = F;
+    #[inline(always)]
+    fn sub(self, o: F) -> F {
+        F(unsafe { _mm512_sub_ps(self.0, o.0) })
+    }
+}
+impl Mul for F {
+    type Output = F;
+    #[inline(always)]
+    fn mul(self, o: F) -> F {
+        F(unsafe { _mm512_mul_ps(self.0, o.0) })
+    }
+}
+impl Div for F {
+    type Output = F;
+    #[inline(always)]
+    fn div(self, o: F) -> F {
+        F(unsafe { _mm512_div_ps(self.0, o.0) })
+    }
+}
+impl Neg for F {
+    type Output = F;
+    /// The sign bit flipped, as Rust's `-x` and glam's `neg`.
+    #[inline(always)]
+    fn neg(self) -> F {
+        F(unsafe {
+            _mm512_castsi512_ps(_mm512_xor_si512(
+                _mm512_castps_si512(self.0),
+                _mm512_set1_epi32(i32::MIN),
+            ))
+        })
+    }
+}
+
+impl U {
+    #[inline(always)]
+    pub fn splat(x: u32) -> U {
+        U(unsafe { _mm512_set1_epi32(x as i32) })
+    }
+    #[inline(always)]
+    pub fn load(a: &[u32; 16]) -> U {
+        U(unsafe { _mm512_loadu_si512(a.as_ptr() as *const _) })
+    }
+    #[inline(always)]
+    pub fn store(self, a: &mut [u32; 16]) {
+        unsafe { _mm512_storeu_si512(a.as_mut_ptr() as *mut _, self.0) }
+    }
+    #[inline(always)]
+    pub fn select(m: M, a: U, b: U) -> U {
+        U(unsafe { _mm512_mask_blend_epi32(m, b.0, a.0) })
+    }
+    #[inline(always)]
+    pub fn add(self, o: U) -> U {
+        U(unsafe { _mm512_add_epi32(self.0, o.0) })
+    }
+    /// Unsigned `x >= o`.
+    #[inline(always)]
+    pub fn ge(self, o: U) -> M {
+        unsafe { _mm512_cmpge_epu32_mask(self.0, o.0) }
+    }
+    /// Unsigned `x == o`.
+    #[inline(always)]
+    pub fn eq(self, o: U) -> M {
+        unsafe { _mm512_cmpeq_epu32_mask(self.0, o.0) }
+    }
+    /// Lanes with any of `bits` set.
+    #[inline(always)]
+    pub fn any(self, bits: u32) -> M {
+        unsafe { _mm512_test_epi32_mask(self.0, _mm512_set1_epi32(bits as i32)) }
+    }
+    /// Lane i of `table` for the index in lane i (below 64).
+    #[inline(always)]
+    pub fn lookup64(table: &[u32; 64], idx: U) -> U {
+        // SAFETY: the same bits through the float permutation.
+        let t: &[f32; 64] = unsafe { &*(table as *const [u32; 64] as *const [f32; 64]) };
+        U(unsafe { _mm512_castps_si512(F::lookup64(t, idx).0) })
+    }
+    /// The lanes as f32 (exact below 2^24).
+    #[inline(always)]
+    pub fn to_f32(self) -> F {
+        F(unsafe { _mm512_cvtepu32_ps(self.0) })
+    }
+}
+
+impl BitAnd for U {
+    type Output = U;
+    #[inline(always)]
+    fn bitand(self, o: U) -> U {
+        U(unsafe { _mm512_and_si512(self.0, o.0) })
+    }
+}
+
+/// Three-component vectors in sixteen lanes, for `Vec3A` (points, directions) and `Color`
+/// (`glam::Vec3`) alike: every operation is component by component but the dot and cross
+/// products, which follow glam's order.
+#[derive(Clone, Copy)]
+pub struct V3 {
+    pub x: F,
+    pub y: F,
+    pub z: F,
+}
+
+impl V3 {
+    #[inline(always)]
+    pub fn splat(v: [f32; 3]) -> V3 {
+        V3 {
+            x: F::splat(v[0]),
+            y: F::splat(v[1]),
+            z: F::splat(v[2]),
+        }
+    }
+    #[inline(always)]
+    pub fn zero() -> V3 {
+        V3 {
+            x: F::zero(),
+            y: F::zero(),
+            z: F::zero(),
+        }
+    }
+    #[inline(always)]
+    pub fn load(a: &[[f32; 16]; 3]) -> V3 {
+        V3 {
+            x: F::load(&a[0]),
+            y: F::load(&a[1]),
+            z: F::load(&a[2]),
+        }
+    }
+    #[inline(always)]
+    pub fn store(self, a: &mut [[f32; 16]; 3]) {
+        self.x.store(&mut a[0]);
+        self.y.store(&mut a[1]);
+        self.z.store(&mut a[2]);
+    }
+    /// glam's `dot`: (x·x' + y·y') + z·z'.
+    #[inline(always)]
+    pub fn dot(self, o: V3) -> F {
+        (self.x * o.x + self.y * o.y) + self.z * o.z
+    }
+    /// glam's `cross`: x = a.y·b.z − b.y·a.z, and so on.
+    #[inline(always)]
+    pub fn cross(self, o: V3) -> V3 {
+        V3 {
+            x: self.y * o.z - o.y * self.z,
+            y: self.z * o.x - o.z * self.x,
+            z: self.x * o.y - o.x * self.y,
+        }
+    }
+    /// glam's `normalize`: each component divided by the length.
+    #[inline(always)]
+    pub fn normalize(self) -> V3 {
+        self.div(self.dot(self).sqrt())
+    }
+    #[inline(always)]
+    pub fn scale(self, s: F) -> V3 {
+        V3 {
+            x: self.x * s,
+            y: self.y * s,
+            z: self.z * s,
+        }
+    }
+    #[inline(always)]
+    pub fn div(self, s: F) -> V3 {
+        V3 {
+            x: self.x / s,
+            y: self.y / s,
+            z: self.z / s,
+        }
+    }
+    #[inline(always)]
+    pub fn abs(self) -> V3 {
+        V3 {
+            x: self.x.abs(),
+            y: self.y.abs(),
+            z: self.z.abs(),
+        }
+    }
+    #[inline(always)]
+    pub fn select(m: M, a: V3, b: V3) -> V3 {
+        V3 {
+            x: F::select(m, a.x, b.x),
+            y: F::select(m, a.y, b.y),
+            z: F::select(m, a.z, b.z),
+        }
+    }
+    /// Lanes where all three components equal zero (`Vec3 == Vec3::ZERO`).
+    #[inline(always)]
+    pub fn is_zero(self) -> M {
+        let z = F::zero();
+        self.x.eq(z) & self.y.eq(z) & self.z.eq(z)
+    }
+    /// Lanes where all three components are finite.
+    #[inline(always)]
+    pub fn is_finite(self) -> M {
+        self.x.is_finite() & self.y.is_finite() & self.z.is_finite()
+    }
+    /// `Vec3::max_element`: x.max(y.max(z)) with `f32::max`.
+    #[inline(always)]
+    pub fn max_element(self) -> F {
+        self.x.max_num2(self.y.max_num2(self.z))
+    }
+    /// Lane i of each component's table.
+    #[inline(always)]
+    pub fn lookup64(table: &[[f32; 64]; 3], idx: U) -> V3 {
+        V3 {
+            x: F::lookup64(&table[0], idx),
+            y: F::lookup64(&table[1], idx),
+            z: F::lookup64(&table[2], idx),
+        }
+    }
+}
+
+impl Add for V3 {
+    type Output = V3;
+    #[inline(always)]
+    fn add(self, o: V3) -> V3 {
+        V3 {
+            x: self.x + o.x,
+            y: self.y + o.y,
+            z: self.z + o.z,
+        }
+    }
+}
+impl Sub for V3 {
+    type Output = V3;
+    #[inline(always)]
+    fn sub(self, o: V3) -> V3 {
+        V3 {
+            x: self.x - o.x,
+            y: self.y - o.y,
+            z: self.z - o.z,
+        }
+    }
+}
+impl Mul for V3 {
+    type Output = V3;
+    #[inline(always)]
+    fn mul(self, o: V3) -> V3 {
+        V3 {
+            x: self.x * o.x,
+            y: self.y * o.y,
+            z: self.z * o.z,
+        }
+    }
+}
+impl Neg for V3 {
+    type Output = V3;
+    #[inline(always)]
+    fn neg(self) -> V3 {
+        V3 {
+            x: -self.x,
+            y: -self.y,
+            z: -self.z,
+        }
+    }
+}

@@ -1,0 +1,384 @@
+//! The wavefront (sixteen paths at a time, `integrator::wavefront`) renders the same film as
+//! the path tracer one path at a time, bit for bit: the same fixed-point sums, sample counts,
+//! ray counts and dropped samples, on scenes that take every branch of a path (emitters
+//! seen directly, through BSDF samples and hidden; one-sided surfaces seen from behind;
+//! black bodies; rays that leave the scene; samples that overflow; both kinds of planar
+//! light; both roulettes; every path length), on odd image sizes, crops and split passes.
+//!
+//! On a CPU without AVX-512 the wavefront never runs and there is nothing to compare; the
+//! tests say so and pass.
+
+use mcrt::film::Film;
+use mcrt::integrator::wavefront::Wavefront;
+use mcrt::render::{render, render_samples, RenderSettings, RenderStats};
+use mcrt::scene::desc::FileSettings;
+use mcrt::scene::Scene;
+use std::path::Path;
+
+fn cpu_runs_it() -> bool {
+    let ok = std::arch::is_x86_feature_detected!("avx512f")
+        && std::arch::is_x86_feature_detected!("avx512dq");
+    if !ok {
+        eprintln!("this CPU lacks AVX-512F/DQ: the wavefront never runs, nothing to compare");
+    }
+    ok
+}
+
+fn scene_from(text: &str) -> Scene {
+    let desc = mcrt::scene::toml::parse_toml(Path::new("test.toml"), text).expect("scene parses");
+    Scene::build(desc)
+}
+
+fn cornell() -> Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.toml");
+    Scene::build(mcrt::load_scene(&path).unwrap())
+}
+
+fn settings(scene: &Scene, over: FileSettings) -> RenderSettings {
+    mcrt::resolve_settings(&scene.desc_settings, &over, Some(2)).unwrap()
+}
+
+/// Renders `scene` with `s` both ways and compares everything the film and the statistics
+/// hold. `scene` must be one the wavefront takes.
+fn same_both_ways(scene: Scene, s: &RenderSettings, what: &str) -> (Film, RenderStats) {
+    assert!(
+        Wavefront::new(&scene, s).is_some(),
+        "{what}: the wavefront does not take this scene, so the test would compare nothing"
+    );
+    let (wide, ws) = render(&scene, s, &|_| {}).unwrap();
+    let scalar = scene.without_wavefront();
+    assert!(Wavefront::new(&scalar, s).is_none());
+    let (one, os) = render(&scalar, s, &|_| {}).unwrap();
+    assert_eq!(wide.count, one.count, "{what}: sample counts");
+    let differ = wide
+        .sum
+        .iter()
+        .zip(&one.sum)
+        .chain(wide.sum_sq.iter().zip(&one.sum_sq))
+        .filter(|(a, b)| a != b)
+        .count();
+    assert_eq!(differ, 0, "{what}: {differ} pixel sums differ");
+    assert_eq!(
+        (ws.samples, ws.rays.rays, ws.rays.shadow_rays),
+        (os.samples, os.rays.rays, os.rays.shadow_rays),
+        "{what}: samples and rays"
+    );
+    assert_eq!(
+        (ws.dropped, ws.first_dropped),
+        (os.dropped, os.first_dropped),
+        "{what}: dropped samples"
+    );
+    (wide, ws)
+}
+
+/// The Cornell box (one-sided Lambertian walls, a white parallelogram light that reflects
+/// too) at every path length and with both roulettes.
+#[test]
+fn cornell_box_both_ways() {
+    if !cpu_runs_it() {
+        return;
+    }
+    use mcrt::integrator::RussianRoulette;
+    let cases: [(&str, Option<u32>, RussianRoulette); 6] = [
+        ("default", Some(8), RussianRoulette::Throughput { start: 5 }),
+        (
+            "max depth 1",
+            Some(1),
+            RussianRoulette::Throughput { start: 5 },
+        ),
+        (
+            "max depth 2",
+            Some(2),
+            RussianRoulette::Throughput { start: 5 },
+        ),
+        ("unlimited", None, RussianRoulette::Throughput { start: 5 }),
+        ("fixed roulette", None, RussianRoulette::Fixed(0.6)),
+        (
+            "roulette from 1",
+            Some(8),
+            RussianRoulette::Throughput { start: 1 },
+        ),
+    ];
+    for (what, max_depth, rr) in cases {
+        let scene = cornell();
+        let mut s = settings(
+            &scene,
+            FileSettings {
+                width: Some(40),
+                height: Some(40),
+                spp: Some(6),
+                seed: Some(11),
+                ..Default::default()
+            },
+        );
+        s.params.max_depth = max_depth;
+        s.params.rr = rr;
+        let (film, stats) = same_both_ways(scene, &s, what);
+        assert!(
+            stats.rays.shadow_rays > 0 || what == "max depth 1",
+            "{what}"
+        );
+        let total: f64 = film.sum_f64().iter().flatten().sum();
+        assert!(total > 0.0, "{what}: the box is lit");
+    }
+}
+
+/// A closed room seen from inside: two-sided and one-sided walls (one of them turned
+/// away, so seen from behind), a black block, a two-sided card, a triangle light facing
+/// down; emitters hidden from the camera or not.
+const ROOM: &str = r#"
+[render]
+max_depth = 6
+
+[[camera]]
+name = "main"
+type = "perspective"
+origin = [0, 1, 2.6]
+target = [0, 1.6, 0]
+up = [0, 1, 0]
+fov = 70
+
+[material.two]
+type = "lambert"
+albedo = [0.8, 0.7, 0.6]
+two_sided = true
+
+[material.one]
+type = "lambert"
+albedo = [0.3, 0.6, 0.9]
+two_sided = false
+
+[material.dark]
+type = "lambert"
+albedo = [0.0, 0.0, 0.0]
+
+[material.black]
+type = "black"
+
+# floor, ceiling, back wall, left and right walls (facing in), front wall behind the camera
+[[shape]]
+type = "quad"
+material = "two"
+vertices = [[-2, 0, 3], [2, 0, 3], [2, 0, -2], [-2, 0, -2]]
+[[shape]]
+type = "quad"
+material = "one"
+vertices = [[-2, 2.5, -2], [2, 2.5, -2], [2, 2.5, 3], [-2, 2.5, 3]]
+[[shape]]
+type = "quad"
+material = "one"
+vertices = [[-2, 0, -2], [2, 0, -2], [2, 2.5, -2], [-2, 2.5, -2]]
+[[shape]]
+type = "quad"
+material = "two"
+vertices = [[-2, 0, 3], [-2, 0, -2], [-2, 2.5, -2], [-2, 2.5, 3]]
+# the right wall faces out: the camera sees its back
+[[shape]]
+type = "quad"
+material = "one"
+vertices = [[2, 0, 3], [2, 0, -2], [2, 2.5, -2], [2, 2.5, 3]]
+[[shape]]
+type = "quad"
+material = "one"
+vertices = [[2, 0, 3], [-2, 0, 3], [-2, 2.5, 3], [2, 2.5, 3]]
+
+# a black block and a dark card, and a two-sided card seen edge-on and from both sides
+[[shape]]
+type = "mesh"
+material = "black"
+positions = [[-1.2, 0, -1], [-0.6, 0, -1], [-0.6, 0, -0.4], [-1.2, 0, -0.4], [-0.9, 0.9, -0.7]]
+indices = [[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]]
+[[shape]]
+type = "triangle"
+material = "dark"
+vertices = [[1.5, 0, -1.5], [1.9, 0, -1.0], [1.7, 1.2, -1.2]]
+[[shape]]
+type = "quad"
+material = "two"
+vertices = [[0.2, 0.1, -0.5], [1.2, 0.1, 0.3], [1.2, 1.4, 0.3], [0.2, 1.4, -0.5]]
+
+# the light: one triangle under the ceiling, facing down
+[[shape]]
+type = "triangle"
+emission = [14, 12, 9]
+vertices = [[-0.5, 2.45, -0.5], [0.6, 2.45, 0.4], [-0.3, 2.45, 0.7]]
+"#;
+
+#[test]
+fn closed_room_both_ways() {
+    if !cpu_runs_it() {
+        return;
+    }
+    for (hide, rr, seed) in [(false, None, 1), (true, None, 2), (false, Some(0.7), 3)] {
+        let text = if hide {
+            ROOM.replace("max_depth = 6", "max_depth = 6\nhide_emitters = true")
+        } else {
+            ROOM.to_string()
+        };
+        let scene = scene_from(&text);
+        let s = settings(
+            &scene,
+            FileSettings {
+                width: Some(37),
+                height: Some(23),
+                spp: Some(5),
+                seed: Some(seed),
+                rr_survival: rr,
+                ..Default::default()
+            },
+        );
+        assert_eq!(s.params.hide_emitters, hide);
+        let what = format!("room, hide {hide}, roulette {rr:?}");
+        let (film, _) = same_both_ways(scene, &s, &what);
+        assert!(
+            film.sum_f64().iter().flatten().sum::<f64>() > 0.0,
+            "{what}: lit"
+        );
+    }
+}
+
+/// An open scene: a floor under a parallelogram light and an overhanging one-sided board,
+/// the camera looking past them at nothing (rays leave the scene), the light seen from
+/// above (its back) and from below.
+const OPEN: &str = r#"
+[render]
+max_depth = -1
+
+[[camera]]
+name = "main"
+type = "perspective"
+origin = [0, 1.5, 4]
+target = [0, 0.6, 0]
+up = [0, 1, 0]
+fov = 60
+
+[material.floor]
+type = "lambert"
+albedo = [0.7, 0.7, 0.7]
+two_sided = false
+
+[material.board]
+type = "lambert"
+albedo = [0.9, 0.2, 0.2]
+two_sided = false
+
+[[shape]]
+type = "quad"
+material = "floor"
+vertices = [[-1.5, 0, 1.5], [1.5, 0, 1.5], [1.5, 0, -1.5], [-1.5, 0, -1.5]]
+[[shape]]
+type = "quad"
+material = "board"
+vertices = [[-1, 0.6, 0.3], [1, 0.6, 0.3], [1, 1.6, -0.4], [-1, 1.6, -0.4]]
+[[shape]]
+type = "quad"
+emission = [6, 6, 6]
+vertices = [[-0.4, 1.2, -0.4], [-0.4, 1.2, 0.4], [0.4, 1.2, 0.4], [0.4, 1.2, -0.4]]
+"#;
+
+#[test]
+fn open_scene_both_ways() {
+    if !cpu_runs_it() {
+        return;
+    }
+    let scene = scene_from(OPEN);
+    let s = settings(
+        &scene,
+        FileSettings {
+            width: Some(33),
+            height: Some(31),
+            spp: Some(7),
+            seed: Some(4),
+            ..Default::default()
+        },
+    );
+    same_both_ways(scene, &s, "open scene");
+}
+
+/// A light so bright that samples overflow to infinity: they are dropped, and the first
+/// such pixel is the same either way.
+#[test]
+fn overflowing_samples_both_ways() {
+    if !cpu_runs_it() {
+        return;
+    }
+    let text = OPEN.replace("emission = [6, 6, 6]", "emission = [3.3e38, 1, 1]");
+    let scene = scene_from(&text);
+    let s = settings(
+        &scene,
+        FileSettings {
+            width: Some(24),
+            height: Some(24),
+            spp: Some(4),
+            seed: Some(9),
+            ..Default::default()
+        },
+    );
+    let (_, stats) = same_both_ways(scene, &s, "overflow");
+    assert!(stats.dropped > 0, "some samples overflow");
+}
+
+/// A crop of the image, rendered in two passes of uneven size, gives the same film as the
+/// path tracer's one pass.
+#[test]
+fn crop_and_passes_both_ways() {
+    if !cpu_runs_it() {
+        return;
+    }
+    let scene = cornell();
+    let mut s = settings(
+        &scene,
+        FileSettings {
+            width: Some(64),
+            height: Some(48),
+            spp: Some(5),
+            seed: Some(21),
+            ..Default::default()
+        },
+    );
+    s.crop = Some([13, 7, 35, 29]);
+    assert!(Wavefront::new(&scene, &s).is_some());
+    let mut wide = Film::new(35, 29);
+    render_samples(&scene, &s, &mut wide, 0, 2, &|_| {}).unwrap();
+    render_samples(&scene, &s, &mut wide, 2, 3, &|_| {}).unwrap();
+    let scalar = scene.without_wavefront();
+    let mut one = Film::new(35, 29);
+    render_samples(&scalar, &s, &mut one, 0, 5, &|_| {}).unwrap();
+    assert_eq!(wide, one);
+}
+
+/// Scenes and settings the wavefront does not take render one path at a time.
+#[test]
+fn declines_what_it_does_not_do() {
+    if !cpu_runs_it() {
+        return;
+    }
+    let scene = cornell();
+    let base = settings(&scene, FileSettings::default());
+    assert!(Wavefront::new(&scene, &base).is_some());
+    let mut s = base.clone();
+    s.params.shadow_rays = 4;
+    assert!(Wavefront::new(&scene, &s).is_none(), "several shadow rays");
+    let mut s = base.clone();
+    s.sampler = mcrt::sampler::SamplerKind::Sobol;
+    assert!(Wavefront::new(&scene, &s).is_none(), "Sobol points");
+    let mut s = base.clone();
+    s.params.kind = mcrt::integrator::IntegratorKind::Direct;
+    assert!(
+        Wavefront::new(&scene, &s).is_none(),
+        "the direct integrator"
+    );
+    // A mirror, a sphere, a second light: not for the wavefront.
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tncg15.toml");
+    let room = Scene::build(mcrt::load_scene(&path).unwrap());
+    assert!(Wavefront::new(&room, &settings(&room, FileSettings::default())).is_none());
+    let two_lights = OPEN.to_string()
+        + r#"
+[[shape]]
+type = "triangle"
+emission = [1, 1, 1]
+vertices = [[2, 0.1, 0], [2, 0.1, 1], [2, 1, 0]]
+"#;
+    let scene = scene_from(&two_lights);
+    assert!(Wavefront::new(&scene, &settings(&scene, FileSettings::default())).is_none());
+}
