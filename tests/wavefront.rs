@@ -347,6 +347,212 @@ fn crop_and_passes_both_ways() {
     assert_eq!(wide, one);
 }
 
+/// The TNCG15 room (two spheres, one diffuse and one of glass, a mirror wall, two-sided
+/// walls, a parallelogram light) from both eyes: one shadow ray and the throughput
+/// roulette; ten shadow rays and the fixed roulette of the report's Figure 3.3; Sobol points.
+#[test]
+fn tncg15_room_both_ways() {
+    if !cpu_runs_it() {
+        return;
+    }
+    use mcrt::integrator::RussianRoulette;
+    use mcrt::sampler::SamplerKind;
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tncg15.toml");
+    let cases = [
+        ("eye1", 1, None, SamplerKind::Independent),
+        ("eye2", 10, Some(0.75), SamplerKind::Independent),
+        ("eye1", 3, None, SamplerKind::Sobol),
+        ("eye2", 1, Some(0.5), SamplerKind::Sobol),
+    ];
+    for (k, (camera, shadow_rays, rr, sampler)) in cases.into_iter().enumerate() {
+        let scene = Scene::build(mcrt::load_scene(&path).unwrap());
+        let mut s = settings(
+            &scene,
+            FileSettings {
+                width: Some(36),
+                height: Some(36),
+                spp: Some(4),
+                seed: Some(k as u64),
+                camera: Some(camera.into()),
+                sampler: Some(sampler),
+                ..Default::default()
+            },
+        );
+        s.params.shadow_rays = shadow_rays;
+        if let Some(q) = rr {
+            s.params.rr = RussianRoulette::Fixed(q);
+        }
+        let what = format!("TNCG15 {camera}, {shadow_rays} shadow rays, {rr:?}, {sampler:?}");
+        let (film, stats) = same_both_ways(scene, &s, &what);
+        assert!(stats.rays.shadow_rays > 0, "{what}");
+        assert!(
+            film.sum_f64().iter().flatten().sum::<f64>() > 0.0,
+            "{what}: lit"
+        );
+    }
+}
+
+/// Several shadow rays a vertex (the planar batch) from a triangle light and from a
+/// parallelogram, with one-sided walls seen from behind; and Sobol points.
+#[test]
+fn shadow_ray_batches_both_ways() {
+    if !cpu_runs_it() {
+        return;
+    }
+    use mcrt::sampler::SamplerKind;
+    for (what, text, n, sampler) in [
+        ("room, triangle light", ROOM, 5, SamplerKind::Independent),
+        ("room, Sobol", ROOM, 2, SamplerKind::Sobol),
+        (
+            "open, parallelogram light",
+            OPEN,
+            7,
+            SamplerKind::Independent,
+        ),
+        ("open, Sobol", OPEN, 1, SamplerKind::Sobol),
+    ] {
+        let scene = scene_from(text);
+        let mut s = settings(
+            &scene,
+            FileSettings {
+                width: Some(29),
+                height: Some(27),
+                spp: Some(3),
+                seed: Some(n as u64),
+                sampler: Some(sampler),
+                ..Default::default()
+            },
+        );
+        s.params.shadow_rays = n;
+        let (_, stats) = same_both_ways(scene, &s, what);
+        assert!(stats.rays.shadow_rays > 0, "{what}");
+    }
+}
+
+/// Mirrors seen from both sides (one-sided and two-sided), glass spheres seen from outside
+/// and inside (total internal reflection), a sphere that touches a wall, spheres that
+/// overlap.
+const SPECULAR: &str = r#"
+[render]
+max_depth = 12
+
+[[camera]]
+name = "main"
+type = "perspective"
+origin = [0, 1.2, 2.8]
+target = [0, 0.9, 0]
+up = [0, 1, 0]
+fov = 75
+
+[material.white]
+type = "lambert"
+albedo = [0.8, 0.8, 0.8]
+[material.mirror1]
+type = "mirror"
+reflectance = [0.9, 0.8, 0.7]
+two_sided = false
+[material.mirror2]
+type = "mirror"
+reflectance = [0.6, 0.9, 0.9]
+[material.glass]
+type = "dielectric"
+ior = 1.5
+[material.dense]
+type = "dielectric"
+ior = 2.4
+ext_ior = 1.2
+
+[[shape]]
+type = "quad"
+material = "white"
+vertices = [[-2, 0, 3], [2, 0, 3], [2, 0, -2], [-2, 0, -2]]
+[[shape]]
+type = "quad"
+material = "white"
+vertices = [[-2, 2.5, -2], [2, 2.5, -2], [2, 2.5, 3], [-2, 2.5, 3]]
+[[shape]]
+type = "quad"
+material = "mirror1"
+vertices = [[-2, 0, -2], [2, 0, -2], [2, 2.5, -2], [-2, 2.5, -2]]
+# a one-sided mirror facing away from the camera, and a two-sided one at an angle
+[[shape]]
+type = "quad"
+material = "mirror1"
+vertices = [[-1.6, 0.2, 0.5], [-1.6, 1.5, 0.5], [-0.8, 1.5, 0.9], [-0.8, 0.2, 0.9]]
+[[shape]]
+type = "quad"
+material = "mirror2"
+vertices = [[1.0, 0.2, -0.5], [1.8, 0.2, 0.2], [1.8, 1.6, 0.2], [1.0, 1.6, -0.5]]
+[[shape]]
+type = "quad"
+material = "white"
+vertices = [[-2, 0, 3], [-2, 0, -2], [-2, 2.5, -2], [-2, 2.5, 3]]
+[[shape]]
+type = "sphere"
+material = "glass"
+center = [0.3, 0.6, 0.2]
+radius = 0.6
+[[shape]]
+type = "sphere"
+material = "dense"
+center = [-0.7, 0.45, -1.0]
+radius = 0.45
+[[shape]]
+type = "sphere"
+material = "white"
+center = [-0.2, 0.45, -1.1]
+radius = 0.4
+[[shape]]
+type = "sphere"
+material = "mirror2"
+center = [1.5, 0.3, -1.7]
+radius = 0.3
+[[shape]]
+type = "quad"
+emission = [10, 9, 8]
+vertices = [[-0.5, 2.45, -0.5], [0.5, 2.45, -0.5], [0.5, 2.45, 0.5], [-0.5, 2.45, 0.5]]
+"#;
+
+#[test]
+fn mirrors_and_glass_both_ways() {
+    if !cpu_runs_it() {
+        return;
+    }
+    use mcrt::integrator::RussianRoulette;
+    for (k, (n, rr, hide)) in [
+        (1, None, false),
+        (4, Some(0.8), false),
+        (1, None, true),
+        (2, Some(0.6), true),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let text = if hide {
+            SPECULAR.replace("max_depth = 12", "max_depth = 12\nhide_emitters = true")
+        } else {
+            SPECULAR.to_string()
+        };
+        let scene = scene_from(&text);
+        let mut s = settings(
+            &scene,
+            FileSettings {
+                width: Some(41),
+                height: Some(33),
+                spp: Some(4),
+                seed: Some(30 + k as u64),
+                ..Default::default()
+            },
+        );
+        s.params.shadow_rays = n;
+        if let Some(q) = rr {
+            s.params.rr = RussianRoulette::Fixed(q);
+        }
+        let what = format!("mirrors and glass, {n} shadow rays, {rr:?}, hide {hide}");
+        same_both_ways(scene, &s, &what);
+    }
+}
+
 /// Scenes and settings the wavefront does not take render one path at a time.
 #[test]
 fn declines_what_it_does_not_do() {
@@ -357,28 +563,71 @@ fn declines_what_it_does_not_do() {
     let base = settings(&scene, FileSettings::default());
     assert!(Wavefront::new(&scene, &base).is_some());
     let mut s = base.clone();
-    s.params.shadow_rays = 4;
-    assert!(Wavefront::new(&scene, &s).is_none(), "several shadow rays");
-    let mut s = base.clone();
-    s.sampler = mcrt::sampler::SamplerKind::Sobol;
-    assert!(Wavefront::new(&scene, &s).is_none(), "Sobol points");
-    let mut s = base.clone();
     s.params.kind = mcrt::integrator::IntegratorKind::Direct;
     assert!(
         Wavefront::new(&scene, &s).is_none(),
         "the direct integrator"
     );
-    // A mirror, a sphere, a second light: not for the wavefront.
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/tncg15.toml");
-    let room = Scene::build(mcrt::load_scene(&path).unwrap());
-    assert!(Wavefront::new(&room, &settings(&room, FileSettings::default())).is_none());
-    let two_lights = OPEN.to_string()
-        + r#"
+    let mut s = base.clone();
+    s.params.max_depth = Some(0);
+    assert!(Wavefront::new(&scene, &s).is_none(), "no path at all");
+    let declined = |what: &str, text: &str| {
+        let scene = scene_from(text);
+        let s = settings(&scene, FileSettings::default());
+        assert!(Wavefront::new(&scene, &s).is_none(), "{what}");
+    };
+    // A second light, a sphere light, a metal, a texture, vertex normals.
+    declined(
+        "two lights",
+        &(OPEN.to_string()
+            + r#"
 [[shape]]
 type = "triangle"
 emission = [1, 1, 1]
 vertices = [[2, 0.1, 0], [2, 0.1, 1], [2, 1, 0]]
-"#;
-    let scene = scene_from(&two_lights);
-    assert!(Wavefront::new(&scene, &settings(&scene, FileSettings::default())).is_none());
+"#),
+    );
+    declined(
+        "a sphere light",
+        &OPEN.replace(
+            "type = \"quad\"\nemission = [6, 6, 6]\nvertices = [[-0.4, 1.2, -0.4], [-0.4, 1.2, 0.4], [0.4, 1.2, 0.4], [0.4, 1.2, -0.4]]",
+            "type = \"sphere\"\nemission = [6, 6, 6]\ncenter = [0, 1.2, 0]\nradius = 0.2",
+        ),
+    );
+    declined(
+        "a metal",
+        &OPEN.replace(
+            "type = \"lambert\"\nalbedo = [0.9, 0.2, 0.2]",
+            "type = \"conductor\"\nmaterial = \"Au\"",
+        ),
+    );
+    declined(
+        "a texture",
+        &OPEN.replace(
+            "[material.board]\ntype = \"lambert\"\nalbedo = [0.9, 0.2, 0.2]",
+            "[texture.checks]\ntype = \"checkerboard\"\ncolor0 = [0.1, 0.1, 0.1]\ncolor1 = [0.9, 0.9, 0.9]\n[material.board]\ntype = \"lambert\"\nalbedo = \"checks\"",
+        ),
+    );
+    declined(
+        "vertex normals",
+        &(OPEN.to_string()
+            + r#"
+[[shape]]
+type = "mesh"
+material = "floor"
+positions = [[-1, 0.1, 0], [1, 0.1, 0], [0, 0.1, 1]]
+indices = [[0, 1, 2]]
+normals = [[0, 1, 0], [0, 1, 0], [0, 1, 0]]
+"#),
+    );
+    // Over 64 primitives.
+    let many: String = (0..40)
+        .map(|i| {
+            let x = i as f32 * 0.05;
+            format!(
+                "[[shape]]\ntype = \"quad\"\nmaterial = \"floor\"\nvertices = [[{x}, 0.1, 0], [{x}, 0.1, 0.02], [{x}, 0.2, 0.02], [{x}, 0.2, 0]]\n"
+            )
+        })
+        .collect();
+    declined("many primitives", &(OPEN.to_string() + &many));
 }

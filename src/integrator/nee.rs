@@ -42,6 +42,13 @@ const BATCH: usize = PACKET;
 const G1: u32 = 0x9e37_79b9;
 const G2: u32 = 0xc13f_a9a9;
 
+/// The lattice's second coordinate for sample `j` of a vertex: frac(j·(φ − 1)) to 24 bits,
+/// repeating after 256 samples (as the batch's table has it).
+#[inline]
+pub(crate) fn lattice_v(j: u32) -> f32 {
+    ((j % 256).wrapping_mul(G1) >> 8) as f32 * (1.0 / 16_777_216.0)
+}
+
 /// Δ in 32-bit fixed point; the sampler's numbers are multiples of 2⁻²⁴, so this is exact.
 #[inline(always)]
 fn fixed(x: f32) -> u32 {

@@ -298,6 +298,19 @@ emission = [5, 5, 5]
         Scene::build(desc)
     }
 
+    /// `lattice_v`, which the wavefront reads sample by sample, is the table's value for
+    /// every sample index.
+    #[test]
+    fn lattice_v_is_the_table() {
+        for j in 0..1000u32 {
+            let t = LATTICE_V[(j % 256) as usize];
+            assert_eq!(crate::integrator::lattice_v(j).to_bits(), t.to_bits(), "sample {j}");
+        }
+        for (j, t) in LATTICE_V.iter().enumerate() {
+            assert_eq!(crate::integrator::lattice_v(j as u32).to_bits(), t.to_bits());
+        }
+    }
+
     /// The eight-lane and four-lane batches give the same bits at random vertices, for
     /// Lambertian and other materials, parallelogram and triangle lights, and sample counts
     /// that fill a vector, leave lanes empty, and need more than one batch.

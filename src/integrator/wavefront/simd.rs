@@ -127,6 +127,27 @@ impl F {
     pub fn select(m: M, a: F, b: F) -> F {
         F(unsafe { _mm512_mask_blend_ps(m, b.0, a.0) })
     }
+    /// `mag.copysign(sign)`: the magnitude of `mag` with the sign bit of `sign`.
+    #[inline(always)]
+    pub fn copysign(mag: F, sign: F) -> F {
+        unsafe {
+            let s = _mm512_and_si512(_mm512_castps_si512(sign.0), _mm512_set1_epi32(i32::MIN));
+            F(_mm512_castsi512_ps(_mm512_or_si512(
+                s,
+                _mm512_castps_si512(mag.abs().0),
+            )))
+        }
+    }
+    /// `f32::next_up` of positive finite numbers: the next float up (one more in the bits).
+    #[inline(always)]
+    pub fn next_up(self) -> F {
+        unsafe {
+            F(_mm512_castsi512_ps(_mm512_add_epi32(
+                _mm512_castps_si512(self.0),
+                _mm512_set1_epi32(1),
+            )))
+        }
+    }
     /// `1.0.copysign(x)`: ±1 with the sign bit of x.
     #[inline(always)]
     pub fn sign_of(x: F) -> F {
@@ -221,10 +242,25 @@ impl U {
     pub fn ge(self, o: U) -> M {
         unsafe { _mm512_cmpge_epu32_mask(self.0, o.0) }
     }
+    /// Unsigned `x < o`.
+    #[inline(always)]
+    pub fn lt(self, o: U) -> M {
+        unsafe { _mm512_cmplt_epu32_mask(self.0, o.0) }
+    }
     /// Unsigned `x == o`.
     #[inline(always)]
     pub fn eq(self, o: U) -> M {
         unsafe { _mm512_cmpeq_epu32_mask(self.0, o.0) }
+    }
+    /// Lanes whose bits under `mask` equal `value`.
+    #[inline(always)]
+    pub fn masked_eq(self, mask: u32, value: u32) -> M {
+        unsafe {
+            _mm512_cmpeq_epu32_mask(
+                _mm512_and_si512(self.0, _mm512_set1_epi32(mask as i32)),
+                _mm512_set1_epi32(value as i32),
+            )
+        }
     }
     /// Lanes with any of `bits` set.
     #[inline(always)]

@@ -1,13 +1,17 @@
-//! Sixteen rays against every triangle of a small scene, one triangle at a time: the
-//! triangle's vertex and edges broadcast, the rays in the lanes. The transpose of
-//! [`crate::accel::flat`], which tests one ray against sixteen triangles; the arithmetic of
-//! each (ray, triangle) pair is the same, operation for operation ([`TriangleBlock`]'s, which
-//! is [`Triangle::intersect`]'s), so each ray gets the hit `Scene::intersect` gives it: the
-//! nearest, and of equally near ones the lowest primitive. Pairs near an edge are decided by
-//! the scene's own test (`Triangle::intersect` with its f64 fallback), as there.
+//! Sixteen rays against every primitive of a small scene, one primitive at a time: its
+//! data broadcast, the rays in the lanes. The transpose of [`crate::accel::flat`], which
+//! tests one ray against sixteen triangles; the arithmetic of each (ray, primitive) pair is
+//! the same, operation for operation ([`TriangleBlock`]'s, which is
+//! [`Triangle::intersect`]'s, and [`Sphere::intersect`]'s), and so are the rules that
+//! choose among hits (the spheres first, each bounded by the nearest so far; then the
+//! triangles, bounded by the spheres' nearest; of equally near hits the lowest primitive).
+//! So each ray gets the hit `Scene::intersect` gives it and the answer `Scene::occluded`
+//! gives it. Triangle pairs near an edge are decided by the scene's own test
+//! (`Triangle::intersect` with its f64 fallback), as there.
 //!
 //! [`TriangleBlock`]: crate::geometry::triangle_block::TriangleBlock
 //! [`Triangle::intersect`]: crate::geometry::Triangle::intersect
+//! [`Sphere::intersect`]: crate::geometry::Sphere::intersect
 
 use super::simd::{F, M, U, V3};
 use crate::geometry::Ray;
@@ -26,17 +30,27 @@ pub struct Tri {
     pub prim: u32,
 }
 
-/// The rays' nearest hits: the lanes hit, and their slot (index into the triangle list),
-/// t, u and v.
+/// A sphere: its centre, its radius squared (as `Sphere::intersect` computes it) and its
+/// primitive index.
+#[derive(Clone, Copy, Debug)]
+pub struct Ball {
+    pub center: [f32; 3],
+    pub r2: f32,
+    pub prim: u32,
+}
+
+/// The rays' nearest hits: the lanes hit, those whose hit is a sphere, the primitive hit,
+/// and t, u and v (a sphere's u and v are 0).
 pub struct Hits {
     pub hit: M,
-    pub slot: U,
+    pub sphere: M,
+    pub prim: U,
     pub t: F,
     pub u: F,
     pub v: F,
 }
 
-/// The (lane, slot) pairs left to the scene's own test, at most one entry per slot.
+/// The (lanes, slot) pairs left to the scene's own test, at most one entry per slot.
 struct Unsure {
     n: usize,
     list: [(u16, u16); 64],
@@ -51,8 +65,8 @@ impl Unsure {
     }
 }
 
-/// Per ray, the pair's quantities of Möller–Trumbore: (u, v, w, t) and the lanes it
-/// classes clear (u, v, w > ε) and out (u or v < −ε, or u + v > 1 + ε).
+/// Per ray, the pair's quantities of Möller–Trumbore: (u, v, t) and the lanes it classes
+/// clear (u, v, w > ε) and out (u or v < −ε, or u + v > 1 + ε).
 #[inline(always)]
 fn test(tri: &Tri, o: &V3, d: &V3) -> (F, F, F, M, M) {
     let (p0, e1, e2) = (V3::splat(tri.p0), V3::splat(tri.e1), V3::splat(tri.e2));
@@ -71,6 +85,30 @@ fn test(tri: &Tri, o: &V3, d: &V3) -> (F, F, F, M, M) {
     (u, v, t, clear, out)
 }
 
+/// `Sphere::intersect` lane by lane: the lanes hit in (0, `t_max`) and their t.
+#[inline(always)]
+fn sphere(b: &Ball, o: &V3, d: &V3, t_max: F) -> (M, F) {
+    let f = *o - V3::splat(b.center);
+    let a = d.dot(*d);
+    let bb = -f.dot(*d);
+    let l = f + d.scale(bb / a);
+    let disc = a * (F::splat(b.r2) - l.dot(l));
+    let sq = disc.sqrt();
+    let c = f.dot(f) - F::splat(b.r2);
+    let q = bb + F::copysign(sq, bb);
+    let zero = F::zero();
+    let centre = q.eq(zero);
+    let t0 = F::select(centre, -sq / a, c / q);
+    let t1 = F::select(centre, sq / a, q / a);
+    let swap = t0.gt(t1);
+    let (t0, t1) = (F::select(swap, t1, t0), F::select(swap, t0, t1));
+    let first = t0.gt(zero) & t0.lt(t_max);
+    let second = t1.gt(zero) & t1.lt(t_max);
+    // (A negative discriminant misses; a NaN one fails every comparison above.)
+    let hit = !disc.lt(zero) & (first | second);
+    (hit, F::select(first, t0, t1))
+}
+
 /// The ray of lane `l`.
 #[inline(always)]
 fn ray_of(o: &[[f32; 16]; 3], d: &[[f32; 16]; 3], l: usize) -> Ray {
@@ -80,16 +118,37 @@ fn ray_of(o: &[[f32; 16]; 3], d: &[[f32; 16]; 3], l: usize) -> Ray {
     )
 }
 
-/// The nearest hits of the rays in lanes `active` (no bound: `Scene::intersect`'s).
+/// The nearest hits of the rays in lanes `active` (no bound, as `Scene::intersect`).
 ///
 /// # Safety
 /// The CPU must have AVX-512F.
 #[inline]
 #[target_feature(enable = "avx512f")]
-pub unsafe fn closest(scene: &Scene, tris: &[Tri], o: V3, d: V3, active: M) -> Hits {
-    let mut bt = F::splat(f32::INFINITY);
+pub unsafe fn closest(
+    scene: &Scene,
+    tris: &[Tri],
+    tri_prim: &[u32; 64],
+    balls: &[Ball],
+    o: V3,
+    d: V3,
+    active: M,
+) -> Hits {
+    let inf = F::splat(f32::INFINITY);
+    // The spheres first, each against the nearest hit so far (`Flat::nearest_sphere`).
+    let (mut st, mut sprim, mut shit) = (inf, U::splat(u32::MAX), 0);
+    for b in balls {
+        let (h, t) = sphere(b, &o, &d, st);
+        let h = h & active;
+        st = F::select(h, t, st);
+        sprim = U::select(h, U::splat(b.prim), sprim);
+        shit |= h;
+    }
+    // The triangles up to one ulp past the spheres' nearest, so that one as near is seen.
+    let bound = F::select(shit, st.next_up(), inf);
+    let mut bt = bound;
     let (mut bu, mut bv) = (F::zero(), F::zero());
     let mut bslot = U::splat(u32::MAX);
+    let mut thit: M = 0;
     let mut unsure = Unsure::new();
     let zero = F::zero();
     for (j, tri) in tris.iter().enumerate() {
@@ -100,37 +159,60 @@ pub unsafe fn closest(scene: &Scene, tris: &[Tri], o: V3, d: V3, active: M) -> H
         bu = F::select(hit, u, bu);
         bv = F::select(hit, v, bv);
         bslot = U::select(hit, U::splat(j as u32), bslot);
+        thit |= hit;
         let uns = !(clear | out) & active;
         if uns != 0 {
             unsure.list[unsure.n] = (uns, j as u16);
             unsure.n += 1;
         }
     }
-    let mut h = Hits {
-        hit: bt.lt(F::splat(f32::INFINITY)) & active,
-        slot: bslot,
-        t: bt,
-        u: bu,
-        v: bv,
-    };
     if unsure.n != 0 {
-        settle(scene, tris, &o, &d, &unsure, &mut h);
+        settle(
+            scene,
+            tris,
+            &o,
+            &d,
+            &unsure,
+            bound,
+            (&mut thit, &mut bslot, &mut bt, &mut bu, &mut bv),
+        );
     }
-    h
+    // A triangle's hit wins if nearer than the spheres', or as near and of a lower
+    // primitive (`Flat::result`).
+    let tprim = U::lookup64(tri_prim, bslot);
+    let tri = thit & (!shit | bt.lt(st) | (bt.eq(st) & tprim.lt(sprim)));
+    let sphere = shit & !tri;
+    Hits {
+        hit: tri | sphere,
+        sphere,
+        prim: U::select(tri, tprim, sprim),
+        t: F::select(tri, bt, st),
+        u: F::select(tri, bu, zero),
+        v: F::select(tri, bv, zero),
+    }
 }
 
-/// The pairs near an edge, decided by the scene's test and kept where nearer than the
-/// lane's hit (or as near and of a lower slot).
+/// The pairs near an edge, decided by the scene's test before the lane's `bound` and kept
+/// where nearer than the lane's triangle hit (or as near and of a lower slot).
 #[cold]
 #[inline(never)]
 #[target_feature(enable = "avx512f")]
-unsafe fn settle(scene: &Scene, tris: &[Tri], o: &V3, d: &V3, unsure: &Unsure, h: &mut Hits) {
+unsafe fn settle(
+    scene: &Scene,
+    tris: &[Tri],
+    o: &V3,
+    d: &V3,
+    unsure: &Unsure,
+    bound: F,
+    (hit, slot, t, u, v): (&mut M, &mut U, &mut F, &mut F, &mut F),
+) {
     let (mut oa, mut da) = ([[0f32; 16]; 3], [[0f32; 16]; 3]);
     o.store(&mut oa);
     d.store(&mut da);
-    let (mut t, mut u, mut v) = (h.t.to_array(), h.u.to_array(), h.v.to_array());
-    let mut slot = [0u32; 16];
-    h.slot.store(&mut slot);
+    let bound = bound.to_array();
+    let (mut ta, mut ua, mut va) = (t.to_array(), u.to_array(), v.to_array());
+    let mut sa = [0u32; 16];
+    slot.store(&mut sa);
     for &(lanes, j) in &unsure.list[..unsure.n] {
         let mut m = lanes;
         while m != 0 {
@@ -138,19 +220,18 @@ unsafe fn settle(scene: &Scene, tris: &[Tri], o: &V3, d: &V3, unsure: &Unsure, h
             m &= m - 1;
             let ray = ray_of(&oa, &da, l);
             let prim = tris[j as usize].prim as usize;
-            if let Some((tt, uu, vv)) = scene.hit(&ray, prim, f32::INFINITY) {
-                let nearer = tt < t[l] || (tt == t[l] && (j as u32) < slot[l]);
-                if nearer {
-                    (t[l], u[l], v[l], slot[l]) = (tt, uu, vv, j as u32);
-                    h.hit |= 1 << l;
+            if let Some((tt, uu, vv)) = scene.hit(&ray, prim, bound[l]) {
+                if tt < ta[l] || (tt == ta[l] && (j as u32) < sa[l]) {
+                    (ta[l], ua[l], va[l], sa[l]) = (tt, uu, vv, j as u32);
+                    *hit |= 1 << l;
                 }
             }
         }
     }
-    h.t = F::load(&t);
-    h.u = F::load(&u);
-    h.v = F::load(&v);
-    h.slot = U::load(&slot);
+    *t = F::load(&ta);
+    *u = F::load(&ua);
+    *v = F::load(&va);
+    *slot = U::load(&sa);
 }
 
 /// The lanes of `active` whose rays are blocked before `t_max` (`Scene::occluded`).
@@ -159,8 +240,19 @@ unsafe fn settle(scene: &Scene, tris: &[Tri], o: &V3, d: &V3, unsure: &Unsure, h
 /// The CPU must have AVX-512F.
 #[inline]
 #[target_feature(enable = "avx512f")]
-pub unsafe fn occluded(scene: &Scene, tris: &[Tri], o: V3, d: V3, t_max: F, active: M) -> M {
+pub unsafe fn occluded(
+    scene: &Scene,
+    tris: &[Tri],
+    balls: &[Ball],
+    o: V3,
+    d: V3,
+    t_max: F,
+    active: M,
+) -> M {
     let mut blocked: M = 0;
+    for b in balls {
+        blocked |= sphere(b, &o, &d, t_max).0 & active;
+    }
     let mut unsure = Unsure::new();
     let zero = F::zero();
     for (j, tri) in tris.iter().enumerate() {

@@ -1,0 +1,223 @@
+//! Next-event estimation lane by lane, for the scene's one planar light: one sample a
+//! vertex as `nee::one_sample` computes it, or n as the planar batch does
+//! (`nee::planar::planar::<true>`, Lambertian vertices), with the shadow rays of all
+//! sixteen lanes traced together, sample by sample.
+
+use super::bsdf::Frame16;
+use super::simd::{F, M, V3};
+use super::{trace, Wavefront};
+use crate::accel::{ShadowPacket, PACKET};
+use crate::geometry::ray::SHADOW_EPSILON;
+use crate::integrator::RayStats;
+use glam::Vec3A;
+use std::f32::consts::{FRAC_1_PI, PI};
+
+/// A vertex of each lane: the point, its error bound and geometric normal, the frame, its
+/// material's colour and the side of the surface the path is on (`Material::orient`:
+/// `oriented` lanes, `side` ±1).
+pub struct Vertex {
+    pub p: V3,
+    pub p_err: V3,
+    pub ng: V3,
+    pub frame: Frame16,
+    pub albedo: V3,
+    pub oriented: M,
+    pub side: F,
+}
+
+/// `offset_ray_origin(p, p_err, n, w)`'s push: n·2(|n|·p_err).
+#[inline(always)]
+pub fn push(n: V3, p_err: V3) -> V3 {
+    n.scale(F::splat(2.0) * n.abs().dot(p_err))
+}
+
+/// `offset_ray_origin(p, _, n, w)` with its push `off`: p moved to `w`'s side of the surface.
+#[inline(always)]
+pub fn offset(p: V3, off: V3, n: V3, w: V3) -> V3 {
+    V3::select(w.dot(n).lt(F::zero()), p - off, p + off)
+}
+
+impl Wavefront<'_> {
+    /// The light's contribution at the Lambertian vertices of lanes `lanes` with one light
+    /// sample each (`one_sample`: `Lights::sample`, `Material::eval_pdf`, the shadow ray
+    /// of `spawn_ray_to`, the power heuristic), `u` its numbers; zero in the other lanes.
+    #[inline(always)]
+    pub(super) unsafe fn one_sample(
+        &self,
+        v: &Vertex,
+        lanes: M,
+        [ux, uy, _]: [F; 3],
+        stats: &mut RayStats,
+    ) -> V3 {
+        let (zero, one) = (F::zero(), F::splat(1.0));
+        let lt = &self.light;
+        let (la, lb, lc) = (V3::splat(lt.a), V3::splat(lt.b), V3::splat(lt.c));
+        // `AreaLight::sample_point`.
+        let pl = if lt.triangle {
+            let su = ux.sqrt();
+            let (bu, bv) = (one - su, uy * su);
+            (la.scale((one - bu) - bv) + lb.scale(bu)) + lc.scale(bv)
+        } else {
+            (la + lb.scale(ux)) + lc.scale(uy)
+        };
+        let ln = V3::splat(lt.normal);
+        let dl = pl - v.p;
+        let dist2 = dl.dot(dl);
+        let wi = dl.div(dist2.sqrt());
+        let cos_l = -ln.dot(wi);
+        // (`sample_discrete` gives the one light probability one.)
+        let pdf = (one * dist2) / (cos_l * F::splat(lt.area));
+        // `Lambert::eval` and `pdf` on the side the path is on.
+        let wil = v.frame.to_local(wi);
+        let wz = wil.z * v.side;
+        let f = V3::select(
+            v.oriented & !wz.le(zero),
+            v.albedo.scale(F::splat(FRAC_1_PI)),
+            V3::zero(),
+        );
+        let bsdf_pdf = F::select(v.oriented, wz.max_num(zero) * F::splat(FRAC_1_PI), zero);
+        let f = f.scale(wil.z.abs());
+        let shadow = lanes & !dist2.eq(zero) & !cos_l.le(zero) & !f.is_zero();
+        // The shadow ray (`spawn_ray_to`), both ends pushed off their surfaces.
+        let so = offset(v.p, push(v.ng, v.p_err), v.ng, dl);
+        let loff = V3::splat(lt.offset);
+        let target = V3::select((so - pl).dot(ln).lt(zero), pl - loff, pl + loff);
+        let mis = super::path::power_heuristic(one * pdf, bsdf_pdf);
+        let contribution = (f * V3::splat(lt.radiance)).scale(mis / pdf);
+        stats.shadow_rays += shadow.count_ones() as u64;
+        let blocked = if shadow != 0 {
+            trace::occluded(
+                self.scene,
+                &self.tris,
+                &self.balls,
+                so,
+                target - so,
+                F::splat(1.0 - SHADOW_EPSILON),
+                shadow,
+            )
+        } else {
+            0
+        };
+        V3::select(shadow & !blocked, contribution, V3::zero())
+    }
+
+    /// The light's contribution at the Lambertian vertices of lanes `lanes` with `n` > 1
+    /// light samples each, as the planar batch computes it (`planar_in::<_, true>`): the
+    /// samples of a rank-1 lattice shifted by `u`, the power heuristic's weight over the
+    /// light pdf in its rearranged form, the weights summed in four running sums by sample
+    /// index mod 4. Zero in lanes not `oriented` (`sample_lights` returns there before the
+    /// batch) and in the others.
+    ///
+    /// The samples are computed sixteen lanes at a time, sample by sample; the shadow rays
+    /// are traced lane by lane, each lane's as the packets of one origin that the batch
+    /// traces (`Scene::occluded_packet`: the BVH culls most of the scene for rays that
+    /// share an origin, which brute force over sixteen origins cannot).
+    #[inline(always)]
+    pub(super) unsafe fn batch(
+        &self,
+        v: &Vertex,
+        lanes: M,
+        [du, dv, _]: [F; 3],
+        stats: &mut RayStats,
+    ) -> V3 {
+        let lanes = lanes & v.oriented;
+        if lanes == 0 {
+            return V3::zero();
+        }
+        let (zero, one) = (F::zero(), F::splat(1.0));
+        let lt = &self.light;
+        let n = self.shadow_rays;
+        let nf = n as f32;
+        let (a, b, c) = (V3::splat(lt.a), V3::splat(lt.b), V3::splat(lt.c));
+        let (nl, off) = (V3::splat(lt.normal), V3::splat(lt.offset));
+        let ns = v.frame.n;
+        // The two possible origins, above and below the surface (`offset_ray_origin`).
+        let push = push(v.ng, v.p_err);
+        let above = offset(v.p, push, v.ng, v.ng);
+        let below = offset(v.p, push, v.ng, -v.ng);
+        let (mut above_a, mut below_a) = ([[0f32; 16]; 3], [[0f32; 16]; 3]);
+        above.store(&mut above_a);
+        below.store(&mut below_a);
+        let (inv_n, neg_area) = (F::splat(1.0 / nf), F::splat(-lt.area));
+        let k = F::splat(nf * nf * PI * PI);
+        let mut acc = [zero; 4];
+        let mut first = 0;
+        while first < n {
+            let m = (n - first).min(PACKET as u32) as usize;
+            // Per sample of this batch: its weight, the lanes it counts in (`good`) and
+            // whose ray leaves below the surface, and the rays' directions (by sample,
+            // axis and lane).
+            let mut weight = [zero; PACKET];
+            let (mut good, mut under) = ([0 as M; PACKET], [0 as M; PACKET]);
+            let mut dirs = [[[0f32; 16]; 3]; PACKET];
+            for s in 0..m {
+                let j = first + s as u32;
+                // Sample j of the lattice shifted by Δ, wrapped into [0, 1).
+                let wrap = |x: F| F::select(x.ge(one), x - one, x);
+                let u = wrap(du + F::splat(j as f32) * inv_n);
+                let w = wrap(dv + F::splat(crate::integrator::lattice_v(j)));
+                let (w0, w1, w2) = if lt.triangle {
+                    let su = u.sqrt();
+                    let (bu, bv) = (one - su, w * su);
+                    ((one - bu) - bv, bu, bv)
+                } else {
+                    (one, u, w)
+                };
+                let q = (a.scale(w0) + b.scale(w1)) + c.scale(w2);
+                let d = q - v.p;
+                let dist2 = d.dot(d);
+                under[s] = v.ng.dot(d).lt(zero);
+                let a_l = nl.dot(d) * neg_area;
+                let a_s = ns.dot(d) * v.side;
+                good[s] = lanes & dist2.gt(zero) & a_l.gt(zero) & a_s.gt(zero);
+                let inv = one / dist2;
+                let t = (a_l * a_s) * (inv * inv);
+                weight[s] = (k * t) / (k + t * t);
+                let o = V3::select(under[s], below, above);
+                let towards = (o - q).dot(nl).lt(zero);
+                let target = V3::select(towards, q - off, q + off);
+                (target - o).store(&mut dirs[s]);
+            }
+            // Each lane's shadow rays, in up to two packets by the side they leave from.
+            let mut visible = [0 as M; PACKET];
+            let mut ll = lanes;
+            while ll != 0 {
+                let lane = ll.trailing_zeros() as usize;
+                ll &= ll - 1;
+                let bit = |x: &[M; PACKET]| {
+                    (0..m).fold(0u32, |acc, s| acc | (((x[s] >> lane) & 1) as u32) << s)
+                };
+                let (ok, down) = (bit(&good), bit(&under));
+                let mut pk = ShadowPacket {
+                    o: Vec3A::ZERO,
+                    d: [[0.0; PACKET]; 3],
+                    t_max: [1.0 - SHADOW_EPSILON; PACKET],
+                };
+                for (s, dir) in dirs.iter().enumerate().take(m) {
+                    for (row, axis) in pk.d.iter_mut().zip(dir) {
+                        row[s] = axis[lane];
+                    }
+                }
+                let mut seen = 0;
+                for (origin, active) in [(&above_a, ok & !down), (&below_a, ok & down)] {
+                    if active != 0 {
+                        pk.o = Vec3A::new(origin[0][lane], origin[1][lane], origin[2][lane]);
+                        stats.shadow_rays += active.count_ones() as u64;
+                        seen |= active & !self.scene.occluded_packet(&pk, active);
+                    }
+                }
+                for (s, vis) in visible.iter_mut().enumerate().take(m) {
+                    *vis |= (((seen >> s) & 1) as M) << lane;
+                }
+            }
+            for s in 0..m {
+                let r = &mut acc[(first as usize + s) % 4];
+                *r = *r + F::select(visible[s], weight[s], zero);
+            }
+            first += m as u32;
+        }
+        let sum = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+        let e = (v.albedo.scale(F::splat(FRAC_1_PI)) * V3::splat(lt.radiance)).scale(sum);
+        V3::select(lanes, e.div(F::splat(nf)), V3::zero())
+    }
+}

@@ -1,0 +1,230 @@
+//! One step of sixteen paths: a pass of `path::li`'s loop for each lane (the hit, its
+//! emission, the light sample, the BSDF sample, the roulette), and the samples of the paths
+//! that end, to the film.
+
+use super::bsdf::{self, Frame16};
+use super::nee::{offset, push, Vertex};
+use super::rng::LaneSampler;
+use super::simd::{F, U, V3};
+use super::{trace, Lanes, Wavefront};
+use super::{BLACK, EMITTER, GLASS, KIND, LAMBERT, MIRROR, TWO_SIDED};
+use crate::film::PixelSums;
+use crate::geometry::ray::gamma;
+use crate::integrator::RussianRoulette;
+use crate::render::{RenderStats, TilePixel};
+
+/// Power heuristic with β = 2, lane by lane as `sampling::power_heuristic`.
+#[inline(always)]
+pub fn power_heuristic(f: F, g: F) -> F {
+    let (f2, g2) = (f * f, g * g);
+    let sum = f2 + g2;
+    let (zero, inf) = (F::zero(), F::splat(f32::INFINITY));
+    let r = F::select(sum.eq(zero), zero, f2 / sum);
+    F::select(f2.abs().eq(inf), F::splat(1.0), r)
+}
+
+impl Wavefront<'_> {
+    /// The hit points of `h`: `Scene::interaction`'s point, error bound and unit normal, for
+    /// a triangle (`Triangle::point`) or a sphere (`Sphere::surface_point`).
+    #[inline(always)]
+    fn hit_point(&self, h: &trace::Hits, o: V3, d: V3) -> (V3, V3, V3) {
+        let prim = h.prim;
+        let (p0, p1, p2) = (
+            V3::lookup64(&self.p0, prim),
+            V3::lookup64(&self.p1, prim),
+            V3::lookup64(&self.p2, prim),
+        );
+        let w = (F::splat(1.0) - h.u) - h.v;
+        let (a, b, c) = (p0.scale(w), p1.scale(h.u), p2.scale(h.v));
+        let tp = (a + b) + c;
+        let t_err = ((a.abs() + b.abs()) + c.abs()).scale(F::splat(gamma(7)));
+        let tn = V3::lookup64(&self.ng, prim);
+        if self.balls.is_empty() {
+            return (tp, t_err, tn);
+        }
+        // Spheres: the hit reprojected onto the surface (p0 holds the centre).
+        let r = F::lookup64(&self.radius, prim);
+        let sn = ((o + d.scale(h.t)) - p0).normalize();
+        let sp = p0 + sn.scale(r);
+        let s_err = (p0.abs() + sn.scale(r).abs()).scale(F::splat(gamma(5)));
+        (
+            V3::select(h.sphere, sp, tp),
+            V3::select(h.sphere, s_err, t_err),
+            V3::select(h.sphere, sn, tn),
+        )
+    }
+
+    /// One step of every active path: a vertex, as one pass of `path::li`'s loop.
+    // (The target features are repeated so that the closures inside get them too.)
+    #[inline]
+    #[target_feature(enable = "avx512f,avx512dq")]
+    pub(super) unsafe fn step<S: LaneSampler>(
+        &self,
+        st: &mut Lanes<S>,
+        pixels: &[TilePixel],
+        sums: &mut [PixelSums],
+        stats: &mut RenderStats,
+    ) {
+        let active = st.active;
+        let (zero, one) = (F::zero(), F::splat(1.0));
+        let o = V3::load(&st.o);
+        let d = V3::load(&st.d);
+        let mut beta = V3::load(&st.beta);
+        let mut l = V3::load(&st.l);
+        let mut eta2 = F::load(&st.eta2);
+        let depth = U::load(&st.depth);
+        stats.rays.rays += active.count_ones() as u64;
+        let h = trace::closest(
+            self.scene,
+            &self.tris,
+            &self.tri_prim,
+            &self.balls,
+            o,
+            d,
+            active,
+        );
+        let hidden = if self.hide_emitters {
+            depth.eq(U::splat(0))
+        } else {
+            0
+        };
+        // A ray that leaves the scene: these scenes have no environment light, so it adds
+        // β·0, as `escaped` returns (which is not nothing where β is not finite).
+        let miss = active & !h.hit;
+        l = V3::select(miss & !hidden, l + beta * V3::zero(), l);
+        let mut done = miss;
+        let hit = h.hit;
+        let (p, p_err, ng) = self.hit_point(&h, o, d);
+        let flags = U::lookup64(&self.flags, h.prim);
+        let kind = |k: u32| hit & flags.masked_eq(KIND, k);
+        let lt = &self.light;
+
+        // Emission (`emitted`), weighted against light sampling where the path got here by
+        // a non-specular BSDF sample.
+        let emitter = hit & flags.any(EMITTER);
+        let nd = -d;
+        let le = V3::select(
+            emitter & ng.dot(nd).gt(zero),
+            V3::splat(lt.radiance),
+            V3::zero(),
+        );
+        let prev_p = V3::load(&st.prev_p);
+        let dd = p - prev_p;
+        let dist2 = dd.dot(dd);
+        let cos_l = (-ng.dot(dd)).max_num(zero) / dist2.sqrt();
+        let light_pdf = F::select(
+            cos_l.le(zero),
+            zero,
+            (F::splat(lt.pmf) * dist2) / (cos_l * F::splat(lt.area)),
+        );
+        let rays = F::splat(self.shadow_rays as f32);
+        let mis = power_heuristic(F::load(&st.prev_pdf), rays * light_pdf);
+        let e = V3::select(emitter & st.has_prev, le.scale(mis), le);
+        l = V3::select(hit & !hidden, l + beta * e, l);
+
+        // The path's length, and black bodies.
+        let last = depth.add(U::splat(1)).ge(U::splat(self.max_depth));
+        let cont = hit & !last & !kind(BLACK);
+        done |= hit & !cont;
+
+        // The shading frame and `Material::orient`: the side the BSDF is seen from (glass:
+        // both), none for a one-sided material seen from behind.
+        let frame = Frame16::new(ng);
+        let wo = frame.to_local(nd);
+        let (lambert, mirror, glass) = (kind(LAMBERT), kind(MIRROR), kind(GLASS));
+        let front = wo.z.gt(zero);
+        let oriented = glass | front | (wo.z.lt(zero) & flags.any(TWO_SIDED));
+        let side = F::select(glass | front, one, F::splat(-1.0));
+        let colour = V3::lookup64(&self.colour, h.prim);
+
+        // Next-event estimation at the non-specular (Lambertian) vertices.
+        let nee = cont & lambert;
+        if nee != 0 {
+            let u = st.rng.next::<3>(nee);
+            let v = Vertex {
+                p,
+                p_err,
+                ng,
+                frame,
+                albedo: colour,
+                oriented,
+                side,
+            };
+            let lit = if self.shadow_rays == 1 {
+                self.one_sample(&v, nee, u, &mut stats.rays)
+            } else {
+                self.batch(&v, nee, u, &mut stats.rays)
+            };
+            l = V3::select(nee, l + beta * lit, l);
+        }
+
+        // The BSDF sample (one request for the direction, the lobe and the roulette).
+        let [ux, uy, u1, u_rr] = st.rng.next::<4>(cont);
+        let eta = F::lookup64(&self.eta, h.prim);
+        let bs = bsdf::sample(
+            wo,
+            [ux, uy, u1],
+            colour,
+            eta,
+            (lambert, mirror, glass),
+            oriented,
+            side,
+        );
+        let mut alive = cont & bs.ok;
+        beta = V3::select(alive, beta * bs.weight, beta);
+        eta2 = F::select(alive, eta2 * (bs.eta * bs.eta), eta2);
+        // `Frame::to_world` and `spawn_ray`.
+        let wi = frame.to_world(bs.wi);
+        let no = offset(p, push(ng, p_err), ng, wi);
+        let depth = depth.add(U::splat(1));
+        // Russian roulette.
+        match self.rr {
+            RussianRoulette::Fixed(q) => {
+                let q = F::splat(q);
+                alive &= !u_rr.ge(q);
+                beta = V3::select(alive, beta.div(q), beta);
+            }
+            RussianRoulette::Throughput { start } => {
+                let plays = alive & depth.ge(U::splat(start));
+                let q = (beta.max_element() * eta2).min_num(F::splat(0.95));
+                alive &= !(plays & u_rr.ge(q));
+                beta = V3::select(plays & alive, beta.div(q), beta);
+            }
+        }
+        alive &= !beta.is_zero();
+        done |= cont & !alive;
+
+        // The paths that ended: their samples to the film.
+        if done != 0 {
+            let ls = [l.x.to_array(), l.y.to_array(), l.z.to_array()];
+            let finite = l.is_finite();
+            let mut m = done;
+            while m != 0 {
+                let lane = m.trailing_zeros() as usize;
+                m &= m - 1;
+                let k = st.pixel[lane] as usize;
+                if finite & (1 << lane) != 0 {
+                    sums[k].add(crate::Color::new(ls[0][lane], ls[1][lane], ls[2][lane]));
+                } else {
+                    stats.dropped += 1;
+                    let (x, y) = (pixels[k].x, pixels[k].y);
+                    if stats.first_dropped.is_none_or(|q| (y, x) < (q.1, q.0)) {
+                        stats.first_dropped = Some((x, y));
+                    }
+                }
+            }
+        }
+
+        no.store(&mut st.o);
+        wi.store(&mut st.d);
+        beta.store(&mut st.beta);
+        l.store(&mut st.l);
+        eta2.store(&mut st.eta2);
+        p.store(&mut st.prev_p);
+        bs.pdf.store(&mut st.prev_pdf);
+        depth.store(&mut st.depth);
+        // After a specular bounce the next emitter hit takes no MIS weight.
+        st.has_prev = alive & lambert;
+        st.active = alive;
+    }
+}
