@@ -109,20 +109,9 @@ pub fn render_samples(
     count: u32,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<RenderStats, RenderError> {
-    let li = |ray: Ray, sampler: &mut Sampler, stats: &mut RayStats| {
-        integrator::li(scene, ray, sampler, &s.params, stats)
-    };
     let mut next = vec![first; film.count.len()];
-    render_tiles(
-        scene,
-        s,
-        film,
-        &mut next,
-        &|_| first + count,
-        &|| false,
-        progress,
-        &Tracer::new(scene, s, &li),
-    )
+    let until = |_| first + count;
+    render_ranges(scene, s, film, &mut next, &until, &|| false, progress)
 }
 
 /// [`render_samples`] with the radiance given by `li`.
@@ -136,16 +125,8 @@ pub fn render_samples_with(
     li: &LiFn,
 ) -> Result<RenderStats, RenderError> {
     let mut next = vec![first; film.count.len()];
-    render_tiles(
-        scene,
-        s,
-        film,
-        &mut next,
-        &|_| first + count,
-        &|| false,
-        progress,
-        &Tracer::per_sample(li),
-    )
+    let until = |_| first + count;
+    render_ranges_with(scene, s, film, &mut next, &until, &|| false, progress, li)
 }
 
 /// Runs `work` on `s.threads` worker threads (or rayon's global pool).

@@ -55,10 +55,9 @@ const LAMBERT: u32 = 0;
 const MIRROR: u32 = 1;
 const GLASS: u32 = 2;
 const BLACK: u32 = 3;
-/// ...whether it is two-sided, emits, is a sphere.
+/// ...whether it is two-sided, and whether it emits.
 const TWO_SIDED: u32 = 4;
 const EMITTER: u32 = 8;
-const IS_SPHERE: u32 = 16;
 
 /// A small scene prepared for sixteen paths at a time: the primitives for the tests, and
 /// per primitive what shading reads, in tables of 64 for lane lookups.
@@ -188,7 +187,7 @@ impl<'a> Wavefront<'a> {
                     w.p0[c][j] = sphere.center[c];
                 }
                 w.radius[j] = sphere.radius;
-                w.flags[j] = flags | IS_SPHERE;
+                w.flags[j] = flags;
                 w.balls.push(Ball {
                     center: sphere.center.into(),
                     r2: sphere.radius * sphere.radius,
@@ -266,11 +265,36 @@ struct Lanes<S> {
     /// Lanes whose path got to its vertex by a non-specular BSDF sample (for MIS on
     /// emitter hits).
     has_prev: M,
+    /// Lanes whose path ended at the last step, their samples not yet on the film.
+    done: M,
+    /// The shadow rays of the last step's light samples, waiting to be traced.
+    shadow: Shadows,
 }
 
+/// A group's shadow rays between `front` and `back` (one light sample a vertex).
+struct Shadows {
+    /// The lanes that sampled the light, those whose sample needs a shadow ray, and of
+    /// those the ones blocked (set by `shadows`).
+    nee: M,
+    lanes: M,
+    blocked: M,
+    o: [[f32; 16]; 3],
+    d: [[f32; 16]; 3],
+    /// What `l += β·lit` adds: β times the contribution where the ray is clear, β·0 where
+    /// it is blocked or there is no ray.
+    lit: [[f32; 16]; 3],
+    dark: [[f32; 16]; 3],
+}
+
+/// Groups of sixteen lanes a tile keeps in flight. Each group's light samples leave shadow
+/// rays in about half its lanes (the others' paths end, or their sample lies behind the
+/// surface: 58 % carry one in the Cornell box); three groups' rays pack into two vectors
+/// where each alone would take one.
+const GROUPS: usize = 4;
+
 impl Wavefront<'_> {
-    #[target_feature(enable = "avx512f,avx512dq")]
-    unsafe fn run<S: LaneSampler>(
+    #[target_feature(enable = "avx512f,avx512dq,bmi2")]
+    unsafe fn run<S: LaneSampler + Clone>(
         &self,
         rng: S,
         camera: &Camera,
@@ -278,7 +302,7 @@ impl Wavefront<'_> {
         sums: &mut [PixelSums],
         stats: &mut RenderStats,
     ) {
-        let mut st = Lanes {
+        let lanes = || Lanes {
             o: [[0.0; 16]; 3],
             d: [[0.0; 16]; 3],
             beta: [[0.0; 16]; 3],
@@ -288,42 +312,70 @@ impl Wavefront<'_> {
             prev_pdf: [0.0; 16],
             depth: [0; 16],
             pixel: [0; 16],
-            rng,
+            rng: rng.clone(),
             active: 0,
             has_prev: 0,
+            done: 0,
+            shadow: Shadows {
+                nee: 0,
+                lanes: 0,
+                blocked: 0,
+                o: [[0.0; 16]; 3],
+                d: [[0.0; 16]; 3],
+                lit: [[0.0; 16]; 3],
+                dark: [[0.0; 16]; 3],
+            },
+        };
+        let mut all: [Lanes<S>; GROUPS] = std::array::from_fn(|_| lanes());
+        // Several light samples a vertex are traced as each lane's packets, in `front`:
+        // nothing to pool, so one group.
+        let groups = if self.shadow_rays == 1 {
+            &mut all[..]
+        } else {
+            &mut all[..1]
         };
         // The next camera sample: pixel k, sample i.
         let (mut k, mut i) = (0usize, pixels.first().map_or(0, |p| p.samples.0));
         let (mut px, mut py) = ([0f32; 16], [0f32; 16]);
         loop {
-            // Free lanes take the next samples.
-            let mut fresh: M = 0;
-            let mut free = !st.active;
-            while free != 0 {
-                while k < pixels.len() && i >= pixels[k].samples.1 {
-                    k += 1;
-                    i = pixels.get(k).map_or(0, |p| p.samples.0);
+            let mut busy = false;
+            for st in groups.iter_mut() {
+                // Free lanes take the next samples.
+                let mut fresh: M = 0;
+                let mut free = !st.active;
+                while free != 0 {
+                    while k < pixels.len() && i >= pixels[k].samples.1 {
+                        k += 1;
+                        i = pixels.get(k).map_or(0, |p| p.samples.0);
+                    }
+                    if k == pixels.len() {
+                        break;
+                    }
+                    let l = free.trailing_zeros() as usize;
+                    free &= free - 1;
+                    let pix = &pixels[k];
+                    let pixel = pix.gy as u64 * self.width as u64 + pix.gx as u64;
+                    st.rng.start(l, self.sampler, self.seed, pixel, i as u64);
+                    st.pixel[l] = k as u32;
+                    (px[l], py[l]) = (pix.gx as f32, pix.gy as f32);
+                    fresh |= 1 << l;
+                    i += 1;
                 }
-                if k == pixels.len() {
-                    break;
+                if fresh != 0 {
+                    self.start(camera, st, fresh, &px, &py);
                 }
-                let l = free.trailing_zeros() as usize;
-                free &= free - 1;
-                let pix = &pixels[k];
-                let pixel = pix.gy as u64 * self.width as u64 + pix.gx as u64;
-                st.rng.start(l, self.sampler, self.seed, pixel, i as u64);
-                st.pixel[l] = k as u32;
-                (px[l], py[l]) = (pix.gx as f32, pix.gy as f32);
-                fresh |= 1 << l;
-                i += 1;
+                if st.active != 0 {
+                    self.front(st, stats);
+                    busy = true;
+                }
             }
-            if fresh != 0 {
-                self.start(camera, &mut st, fresh, &px, &py);
-            }
-            if st.active == 0 {
+            if !busy {
                 break;
             }
-            self.step(&mut st, pixels, sums, stats);
+            self.shadows(groups);
+            for st in groups.iter_mut() {
+                self.back(st, pixels, sums, stats);
+            }
         }
     }
 
@@ -331,7 +383,7 @@ impl Wavefront<'_> {
     /// request), and their paths' initial state.
     #[inline]
     #[target_feature(enable = "avx512f,avx512dq")]
-    unsafe fn start<S: LaneSampler>(
+    unsafe fn start<S: LaneSampler + Clone>(
         &self,
         cam: &Camera,
         st: &mut Lanes<S>,

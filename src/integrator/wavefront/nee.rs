@@ -5,7 +5,7 @@
 
 use super::bsdf::Frame16;
 use super::simd::{F, M, V3};
-use super::{trace, Wavefront};
+use super::Wavefront;
 use crate::accel::{ShadowPacket, PACKET};
 use crate::geometry::ray::SHADOW_EPSILON;
 use crate::integrator::RayStats;
@@ -38,17 +38,18 @@ pub fn offset(p: V3, off: V3, n: V3, w: V3) -> V3 {
 }
 
 impl Wavefront<'_> {
-    /// The light's contribution at the Lambertian vertices of lanes `lanes` with one light
-    /// sample each (`one_sample`: `Lights::sample`, `Material::eval_pdf`, the shadow ray
-    /// of `spawn_ray_to`, the power heuristic), `u` its numbers; zero in the other lanes.
+    /// One light sample at the Lambertian vertices of lanes `lanes` (`one_sample`:
+    /// `Lights::sample`, `Material::eval_pdf`, the shadow ray of `spawn_ray_to`, the power
+    /// heuristic), `u` its numbers: the lanes whose sample needs a shadow ray (the others
+    /// contribute nothing), the rays' origins and directions (to be clear up to
+    /// 1 − `SHADOW_EPSILON`), and the samples' contributions where the ray is clear.
     #[inline(always)]
     pub(super) unsafe fn one_sample(
         &self,
         v: &Vertex,
         lanes: M,
         [ux, uy, _]: [F; 3],
-        stats: &mut RayStats,
-    ) -> V3 {
+    ) -> (M, V3, V3, V3) {
         let (zero, one) = (F::zero(), F::splat(1.0));
         let lt = &self.light;
         let (la, lb, lc) = (V3::splat(lt.a), V3::splat(lt.b), V3::splat(lt.c));
@@ -84,21 +85,7 @@ impl Wavefront<'_> {
         let target = V3::select((so - pl).dot(ln).lt(zero), pl - loff, pl + loff);
         let mis = super::path::power_heuristic(one * pdf, bsdf_pdf);
         let contribution = (f * V3::splat(lt.radiance)).scale(mis / pdf);
-        stats.shadow_rays += shadow.count_ones() as u64;
-        let blocked = if shadow != 0 {
-            trace::occluded(
-                self.scene,
-                &self.tris,
-                &self.balls,
-                so,
-                target - so,
-                F::splat(1.0 - SHADOW_EPSILON),
-                shadow,
-            )
-        } else {
-            0
-        };
-        V3::select(shadow & !blocked, contribution, V3::zero())
+        (shadow, so, target - so, contribution)
     }
 
     /// The light's contribution at the Lambertian vertices of lanes `lanes` with `n` > 1

@@ -5,11 +5,11 @@
 use super::bsdf::{self, Frame16};
 use super::nee::{offset, push, Vertex};
 use super::rng::LaneSampler;
-use super::simd::{F, U, V3};
-use super::{trace, Lanes, Wavefront};
+use super::simd::{F, M, U, V3};
+use super::{trace, Lanes, Wavefront, GROUPS};
 use super::{BLACK, EMITTER, GLASS, KIND, LAMBERT, MIRROR, TWO_SIDED};
 use crate::film::PixelSums;
-use crate::geometry::ray::gamma;
+use crate::geometry::ray::{gamma, SHADOW_EPSILON};
 use crate::integrator::RussianRoulette;
 use crate::render::{RenderStats, TilePixel};
 
@@ -54,17 +54,15 @@ impl Wavefront<'_> {
         )
     }
 
-    /// One step of every active path: a vertex, as one pass of `path::li`'s loop.
+    /// The first half of a step of every active path of a group: a vertex, as one pass of
+    /// `path::li`'s loop, but for the one shadow ray of its light sample, which is left in
+    /// `st.shadow` for [`Self::shadows`] to trace with the other groups' (several light
+    /// samples a vertex are traced here, each lane's as packets), and the samples of the
+    /// paths that end, which [`Self::back`] adds to the film once the shadow rays are in.
     // (The target features are repeated so that the closures inside get them too.)
     #[inline]
     #[target_feature(enable = "avx512f,avx512dq")]
-    pub(super) unsafe fn step<S: LaneSampler>(
-        &self,
-        st: &mut Lanes<S>,
-        pixels: &[TilePixel],
-        sums: &mut [PixelSums],
-        stats: &mut RenderStats,
-    ) {
+    pub(super) unsafe fn front<S: LaneSampler>(&self, st: &mut Lanes<S>, stats: &mut RenderStats) {
         let active = st.active;
         let (zero, one) = (F::zero(), F::splat(1.0));
         let o = V3::load(&st.o);
@@ -137,8 +135,12 @@ impl Wavefront<'_> {
         let side = F::select(glass | front, one, F::splat(-1.0));
         let colour = V3::lookup64(&self.colour, h.prim);
 
-        // Next-event estimation at the non-specular (Lambertian) vertices.
+        // Next-event estimation at the non-specular (Lambertian) vertices: with one light
+        // sample, its shadow ray and the two values `l += β·lit` can add (β times the
+        // sample's contribution, or β·0 if it is blocked) wait for `shadows`.
         let nee = cont & lambert;
+        st.shadow.lanes = 0;
+        st.shadow.nee = nee;
         if nee != 0 {
             let u = st.rng.next::<3>(nee);
             let v = Vertex {
@@ -150,12 +152,20 @@ impl Wavefront<'_> {
                 oriented,
                 side,
             };
-            let lit = if self.shadow_rays == 1 {
-                self.one_sample(&v, nee, u, &mut stats.rays)
+            if self.shadow_rays == 1 {
+                let (lanes, o, d, contribution) = self.one_sample(&v, nee, u);
+                stats.rays.shadow_rays += lanes.count_ones() as u64;
+                let sh = &mut st.shadow;
+                sh.lanes = lanes;
+                o.store(&mut sh.o);
+                d.store(&mut sh.d);
+                (beta * contribution).store(&mut sh.lit);
+                (beta * V3::zero()).store(&mut sh.dark);
             } else {
-                self.batch(&v, nee, u, &mut stats.rays)
-            };
-            l = V3::select(nee, l + beta * lit, l);
+                let lit = self.batch(&v, nee, u, &mut stats.rays);
+                l = V3::select(nee, l + beta * lit, l);
+                st.shadow.nee = 0;
+            }
         }
 
         // The BSDF sample (one request for the direction, the lobe and the roulette).
@@ -194,27 +204,6 @@ impl Wavefront<'_> {
         alive &= !beta.is_zero();
         done |= cont & !alive;
 
-        // The paths that ended: their samples to the film.
-        if done != 0 {
-            let ls = [l.x.to_array(), l.y.to_array(), l.z.to_array()];
-            let finite = l.is_finite();
-            let mut m = done;
-            while m != 0 {
-                let lane = m.trailing_zeros() as usize;
-                m &= m - 1;
-                let k = st.pixel[lane] as usize;
-                if finite & (1 << lane) != 0 {
-                    sums[k].add(crate::Color::new(ls[0][lane], ls[1][lane], ls[2][lane]));
-                } else {
-                    stats.dropped += 1;
-                    let (x, y) = (pixels[k].x, pixels[k].y);
-                    if stats.first_dropped.is_none_or(|q| (y, x) < (q.1, q.0)) {
-                        stats.first_dropped = Some((x, y));
-                    }
-                }
-            }
-        }
-
         no.store(&mut st.o);
         wi.store(&mut st.d);
         beta.store(&mut st.beta);
@@ -226,5 +215,124 @@ impl Wavefront<'_> {
         // After a specular bounce the next emitter hit takes no MIS weight.
         st.has_prev = alive & lambert;
         st.active = alive;
+        st.done = done;
+    }
+
+    /// The second half of a group's step, once `shadows` has traced its shadow rays: the
+    /// light samples' values added (`l += β·lit`, after the vertex's emission and before
+    /// the next vertex's, as `path::li` adds them), and the samples of the paths that ended
+    /// added to the film.
+    #[inline]
+    #[target_feature(enable = "avx512f,avx512dq")]
+    pub(super) unsafe fn back<S: LaneSampler>(
+        &self,
+        st: &mut Lanes<S>,
+        pixels: &[TilePixel],
+        sums: &mut [PixelSums],
+        stats: &mut RenderStats,
+    ) {
+        let mut l = V3::load(&st.l);
+        let sh = &mut st.shadow;
+        if sh.nee != 0 {
+            let lit = V3::select(
+                sh.lanes & !sh.blocked,
+                V3::load(&sh.lit),
+                V3::load(&sh.dark),
+            );
+            l = V3::select(sh.nee, l + lit, l);
+            l.store(&mut st.l);
+            (sh.nee, sh.lanes) = (0, 0);
+        }
+        let done = st.done;
+        if done == 0 {
+            return;
+        }
+        let ls = [l.x.to_array(), l.y.to_array(), l.z.to_array()];
+        let finite = l.is_finite();
+        let mut m = done;
+        while m != 0 {
+            let lane = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let k = st.pixel[lane] as usize;
+            if finite & (1 << lane) != 0 {
+                sums[k].add(crate::Color::new(ls[0][lane], ls[1][lane], ls[2][lane]));
+            } else {
+                stats.dropped += 1;
+                let (x, y) = (pixels[k].x, pixels[k].y);
+                if stats.first_dropped.is_none_or(|q| (y, x) < (q.1, q.0)) {
+                    stats.first_dropped = Some((x, y));
+                }
+            }
+        }
+        st.done = 0;
+    }
+
+    /// The shadow rays `front` left in the groups, traced together: packed sixteen to a
+    /// vector (where each group alone fills about half of one), each against every
+    /// primitive (`Scene::occluded`'s answers), the answers unpacked into each group's
+    /// `blocked` lanes.
+    #[inline]
+    #[target_feature(enable = "avx512f,avx512dq,bmi2")]
+    pub(super) unsafe fn shadows<S: LaneSampler>(&self, groups: &mut [Lanes<S>]) {
+        use std::arch::x86_64::{_mm512_maskz_compress_ps, _mm512_storeu_ps, _pdep_u64};
+        // The rays, packed: origin and direction by axis. Room for every group's sixteen.
+        const ROOM: usize = 16 * GROUPS;
+        let mut o = [[0f32; ROOM + 16]; 3];
+        let mut d = [[0f32; ROOM + 16]; 3];
+        let mut n = 0;
+        for g in groups.iter() {
+            let sh = &g.shadow;
+            if sh.lanes == 0 {
+                continue;
+            }
+            for axis in 0..3 {
+                // Compressed in a register and stored whole (the store to memory that
+                // compresses is microcoded and slow on AMD's Zen 4); the lanes past the
+                // packed ones are overwritten by the next group's, or never read.
+                let pack = |dst: &mut [f32; ROOM + 16], src: &[f32; 16]| {
+                    let packed = _mm512_maskz_compress_ps(sh.lanes, F::load(src).0);
+                    _mm512_storeu_ps(dst.as_mut_ptr().add(n), packed)
+                };
+                pack(&mut o[axis], &sh.o[axis]);
+                pack(&mut d[axis], &sh.d[axis]);
+            }
+            n += sh.lanes.count_ones() as usize;
+        }
+        // Their answers, a bit a ray.
+        let mut blocked = 0u64;
+        let t_max = F::splat(1.0 - SHADOW_EPSILON);
+        for first in (0..n).step_by(16) {
+            let lanes = if n - first >= 16 {
+                M::MAX
+            } else {
+                (1 << (n - first)) - 1
+            };
+            let v = |a: &[[f32; ROOM + 16]; 3]| {
+                let at = |x: &[f32; ROOM + 16]| {
+                    F(std::arch::x86_64::_mm512_loadu_ps(x.as_ptr().add(first)))
+                };
+                V3 {
+                    x: at(&a[0]),
+                    y: at(&a[1]),
+                    z: at(&a[2]),
+                }
+            };
+            let b = trace::occluded(
+                self.scene,
+                &self.tris,
+                &self.balls,
+                v(&o),
+                v(&d),
+                t_max,
+                lanes,
+            );
+            blocked |= (b as u64) << first;
+        }
+        let mut at = 0;
+        for g in groups.iter_mut() {
+            let sh = &mut g.shadow;
+            sh.blocked = _pdep_u64(blocked >> at, sh.lanes as u64) as M;
+            at += sh.lanes.count_ones();
+        }
     }
 }

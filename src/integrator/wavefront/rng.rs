@@ -27,6 +27,7 @@ pub trait LaneSampler {
 const PCG_MULT: u64 = 6_364_136_223_846_793_005;
 
 /// Sixteen PCG32 streams.
+#[derive(Clone)]
 pub struct Pcg16 {
     state: [u64; 16],
     inc: [u64; 16],
@@ -95,6 +96,7 @@ impl LaneSampler for Pcg16 {
 }
 
 /// Sixteen `Sampler`s, for the samplers whose numbers are not lane arithmetic.
+#[derive(Clone)]
 pub struct Samplers16 {
     lanes: [Sampler; 16],
 }
