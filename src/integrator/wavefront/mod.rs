@@ -11,7 +11,11 @@
 //! hits, samples the light for all of them and traces their shadow rays ([`nee`]), samples
 //! their BSDFs ([`bsdf`]) and plays their roulette ([`path`]), with the branches turned into
 //! lane masks. A lane whose path ends takes the tile's next camera sample at the next step,
-//! so the lanes stay full until the tile runs out of samples.
+//! so the lanes stay full until the tile runs out of samples. With one light sample a
+//! vertex, a tile keeps [`GROUPS`] groups of sixteen paths in flight and traces their shadow
+//! rays together, packed sixteen to a vector (each group's fill about half of one): a step
+//! is [`Wavefront::front`] for every group, [`Wavefront::shadows`], then
+//! [`Wavefront::back`] for every group.
 //!
 //! Each lane computes exactly what `path::li` computes for its camera sample, operation for
 //! operation ([`simd`]): the same numbers from the same sampler ([`rng`]), the same hits,
