@@ -17,9 +17,12 @@ use std::path::Path;
 
 fn cpu_runs_it() -> bool {
     let ok = std::arch::is_x86_feature_detected!("avx512f")
-        && std::arch::is_x86_feature_detected!("avx512dq");
+        && std::arch::is_x86_feature_detected!("avx512dq")
+        && std::arch::is_x86_feature_detected!("bmi2");
     if !ok {
-        eprintln!("this CPU lacks AVX-512F/DQ: the wavefront never runs, nothing to compare");
+        eprintln!(
+            "this CPU lacks AVX-512F/DQ or BMI2: the wavefront never runs, nothing to compare"
+        );
     }
     ok
 }
@@ -571,6 +574,14 @@ fn declines_what_it_does_not_do() {
     let mut s = base.clone();
     s.params.max_depth = Some(0);
     assert!(Wavefront::new(&scene, &s).is_none(), "no path at all");
+    let mut s = base.clone();
+    s.params.shadow_rays = 0;
+    assert!(Wavefront::new(&scene, &s).is_none(), "no shadow ray");
+    // The path tracer's single rays through the BVH rather than by brute force.
+    assert!(
+        Wavefront::new(&cornell().without_flat(), &base).is_none(),
+        "the BVH traces"
+    );
     let declined = |what: &str, text: &str| {
         let scene = scene_from(text);
         let s = settings(&scene, FileSettings::default());
@@ -630,4 +641,18 @@ normals = [[0, 1, 0], [0, 1, 0], [0, 1, 0]]
         })
         .collect();
     declined("many primitives", &(OPEN.to_string() + &many));
+    // Five spheres: more than brute force takes (four are taken).
+    let ball = |i: usize| {
+        format!(
+            "[[shape]]\ntype = \"sphere\"\nmaterial = \"floor\"\ncenter = [{}, 0.3, 0]\nradius = 0.1\n",
+            i as f32 * 0.3 - 0.6
+        )
+    };
+    declined(
+        "five spheres",
+        &(OPEN.to_string() + &(0..5).map(ball).collect::<String>()),
+    );
+    let scene = scene_from(&(OPEN.to_string() + &(0..4).map(ball).collect::<String>()));
+    let s = settings(&scene, FileSettings::default());
+    assert!(Wavefront::new(&scene, &s).is_some(), "four spheres");
 }

@@ -1,7 +1,8 @@
 //! Next-event estimation lane by lane, for the scene's one planar light: one sample a
-//! vertex as `nee::one_sample` computes it, or n as the planar batch does
-//! (`nee::planar::planar::<true>`, Lambertian vertices), with the shadow rays of all
-//! sixteen lanes traced together, sample by sample.
+//! vertex as `nee::one_sample` computes it (its shadow rays are left to the caller, which
+//! pools them across groups of lanes), or n as the planar batch does
+//! (`nee::planar::planar::<true>`, Lambertian vertices), the samples computed sixteen lanes
+//! at a time and each lane's shadow rays traced as its own packets.
 
 use super::bsdf::Frame16;
 use super::simd::{F, M, V3};
@@ -93,7 +94,7 @@ impl Wavefront<'_> {
     /// samples of a rank-1 lattice shifted by `u`, the power heuristic's weight over the
     /// light pdf in its rearranged form, the weights summed in four running sums by sample
     /// index mod 4. Zero in lanes not `oriented` (`sample_lights` returns there before the
-    /// batch) and in the others.
+    /// batch) and in lanes not in `lanes`.
     ///
     /// The samples are computed sixteen lanes at a time, sample by sample; the shadow rays
     /// are traced lane by lane, each lane's as the packets of one origin that the batch

@@ -3,10 +3,13 @@
 //! approximations, sums in the order glam writes them. So a lane computes the bits the scalar
 //! path computes for its path.
 //!
-//! The operator impls are `#[inline(always)]` functions without target features that call
-//! the intrinsics; inlined into the wavefront's `#[target_feature(enable = "avx512f")]`
-//! functions, they become single instructions (they are never called anywhere else: every
-//! value of these types is made inside such a function, on a CPU that has AVX-512).
+//! The operator impls and methods are `#[inline(always)]` functions without target features
+//! that call the intrinsics; inlined into the wavefront's `#[target_feature(enable =
+//! "avx512f")]` functions, they become single instructions. They are safe functions that
+//! run AVX-512 instructions, which is sound only because nothing outside this private
+//! module tree calls them: every value of these types, and every call of the wavefront's
+//! helpers built on them (`bsdf`, `nee`, `path`), is made inside such a function, which
+//! runs only where `Wavefront::new` found the features.
 
 use std::arch::x86_64::*;
 use std::ops::{Add, BitAnd, Div, Mul, Neg, Sub};

@@ -6,7 +6,7 @@
 //! choose among hits (the spheres first, each bounded by the nearest so far; then the
 //! triangles, bounded by the spheres' nearest; of equally near hits the lowest primitive).
 //! So each ray gets the hit `Scene::intersect` gives it and the answer `Scene::occluded`
-//! gives it. Triangle pairs near an edge are decided by the scene's own test
+//! gives it, in the scenes it traces by brute force (those `Wavefront::new` takes). Triangle pairs near an edge are decided by the scene's own test
 //! (`Triangle::intersect` with its f64 fallback), as there.
 //!
 //! [`TriangleBlock`]: crate::geometry::triangle_block::TriangleBlock
