@@ -6,7 +6,8 @@
 //! light; both roulettes; every path length), on odd image sizes, crops and split passes.
 //!
 //! On a CPU without AVX-512 the wavefront never runs and there is nothing to compare; the
-//! tests say so and pass.
+//! tests say so and pass. (The wavefront is x86-64 code; elsewhere there is nothing here.)
+#![cfg(target_arch = "x86_64")]
 
 use mcrt::film::Film;
 use mcrt::integrator::wavefront::Wavefront;

@@ -22,7 +22,9 @@ use crate::sampler::Sampler;
 use crate::scene::{Interaction, Scene};
 use crate::Color;
 use glam::Vec3A;
-pub(crate) use nee::{lattice_v, sample_lights};
+#[cfg(target_arch = "x86_64")]
+pub(crate) use nee::lattice_v;
+pub(crate) use nee::sample_lights;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum IntegratorKind {

@@ -45,6 +45,7 @@ const G2: u32 = 0xc13f_a9a9;
 /// The lattice's second coordinate for sample `j` of a vertex: frac(j·(φ − 1)) to 24 bits,
 /// repeating after 256 samples (as the batch's table has it).
 #[inline]
+#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))] // (read by the wavefront)
 pub(crate) fn lattice_v(j: u32) -> f32 {
     ((j % 256).wrapping_mul(G1) >> 8) as f32 * (1.0 / 16_777_216.0)
 }

@@ -305,16 +305,13 @@ emission = [5, 5, 5]
         for j in 0..1000u32 {
             let t = LATTICE_V[(j % 256) as usize];
             assert_eq!(
-                crate::integrator::lattice_v(j).to_bits(),
+                super::super::lattice_v(j).to_bits(),
                 t.to_bits(),
                 "sample {j}"
             );
         }
         for (j, t) in LATTICE_V.iter().enumerate() {
-            assert_eq!(
-                crate::integrator::lattice_v(j as u32).to_bits(),
-                t.to_bits()
-            );
+            assert_eq!(super::super::lattice_v(j as u32).to_bits(), t.to_bits());
         }
     }
 
