@@ -7,7 +7,7 @@
 //!
 //! Each row renders the scene at 128×128 (Figure 3.3's settings at 250×250) once per
 //! round each way, the two ways alternating; it prints the fastest and the median round of
-//! each and the ratio of the medians. (x86-64 with AVX-512F and AVX-512DQ; elsewhere the
+//! each and the ratio of the medians. (x86-64 with AVX-512F, AVX-512DQ and BMI2; elsewhere the
 //! wavefront never runs and there is nothing to compare.)
 
 fn main() {
