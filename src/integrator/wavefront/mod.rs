@@ -13,7 +13,7 @@
 //! lane masks. A lane whose path ends takes the tile's next camera sample at the next step,
 //! so the lanes stay full until the tile runs out of samples. With one light sample a
 //! vertex, a tile keeps [`GROUPS`] groups of sixteen paths in flight and traces their shadow
-//! rays together, packed sixteen to a vector (each group's fill about half of one): a step
+//! rays together, packed sixteen to a vector (each group's rays fill about half of one): a step
 //! is [`Wavefront::front`] for every group, [`Wavefront::shadows`], then
 //! [`Wavefront::back`] for every group.
 //!
@@ -29,8 +29,8 @@
 //! (`accel::flat`: at most 64 triangles and 4 spheres); every material Lambertian (one- or
 //! two-sided, untextured), a mirror (untextured), smooth glass or black; no vertex normals;
 //! one light, a triangle or a parallelogram; the `path` integrator, any number of shadow
-//! rays, either sampler. Any other scene, and any CPU without AVX-512F, AVX-512DQ and BMI2,
-//! renders with `path::li` as before. The Cornell box and the TNCG15 room are such scenes.
+//! rays, either sampler. The Cornell box and the TNCG15 room are such scenes. Any other
+//! scene, and any CPU without AVX-512F, AVX-512DQ and BMI2, renders with `path::li`.
 
 mod bsdf;
 mod nee;
