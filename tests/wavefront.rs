@@ -33,6 +33,15 @@ fn scene_from(text: &str) -> Scene {
     Scene::build(desc)
 }
 
+/// `text` (whose first table is `[render]`), with `hide_emitters = true` if `hide`.
+fn hiding_emitters(text: &str, hide: bool) -> String {
+    if hide {
+        text.replacen("[render]", "[render]\nhide_emitters = true", 1)
+    } else {
+        text.to_string()
+    }
+}
+
 fn cornell() -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.toml");
     Scene::build(mcrt::load_scene(&path).unwrap())
@@ -214,12 +223,7 @@ fn closed_room_both_ways() {
         return;
     }
     for (hide, rr, seed) in [(false, None, 1), (true, None, 2), (false, Some(0.7), 3)] {
-        let text = if hide {
-            ROOM.replace("max_depth = 6", "max_depth = 6\nhide_emitters = true")
-        } else {
-            ROOM.to_string()
-        };
-        let scene = scene_from(&text);
+        let scene = scene_from(&hiding_emitters(ROOM, hide));
         let s = settings(
             &scene,
             FileSettings {
@@ -532,12 +536,7 @@ fn mirrors_and_glass_both_ways() {
     .into_iter()
     .enumerate()
     {
-        let text = if hide {
-            SPECULAR.replace("max_depth = 12", "max_depth = 12\nhide_emitters = true")
-        } else {
-            SPECULAR.to_string()
-        };
-        let scene = scene_from(&text);
+        let scene = scene_from(&hiding_emitters(SPECULAR, hide));
         let mut s = settings(
             &scene,
             FileSettings {

@@ -17,7 +17,7 @@ impl Frame16 {
     #[inline(always)]
     pub fn new(n: V3) -> Frame16 {
         let one = F::splat(1.0);
-        let sign = F::sign_of(n.z);
+        let sign = F::copysign(one, n.z);
         let a = F::splat(-1.0) / (sign + n.z);
         let b = (n.x * n.y) * a;
         Frame16 {

@@ -68,8 +68,6 @@ const EMITTER: u32 = 8;
 pub struct Wavefront<'a> {
     scene: &'a Scene,
     tris: Vec<Tri>,
-    /// The primitive of each triangle slot.
-    tri_prim: [u32; 64],
     balls: Vec<Ball>,
     /// Triangles: vertices and unit geometric normal (also the shading normal: no vertex
     /// normals here). Spheres: centre (in `p0`) and radius.
@@ -135,7 +133,6 @@ impl<'a> Wavefront<'a> {
         let mut w = Wavefront {
             scene,
             tris: Vec::with_capacity(n),
-            tri_prim: [0; 64],
             balls: Vec::new(),
             p0: [[0.0; 64]; 3],
             p1: [[0.0; 64]; 3],
@@ -219,7 +216,6 @@ impl<'a> Wavefront<'a> {
                 w.p2[c][j] = tri.p2[c];
                 w.ng[c][j] = ng[c];
             }
-            w.tri_prim[w.tris.len()] = j as u32;
             w.tris.push(Tri {
                 p0: tri.p0.into(),
                 e1: e1.into(),

@@ -72,15 +72,7 @@ impl Wavefront<'_> {
         let mut eta2 = F::load(&st.eta2);
         let depth = U::load(&st.depth);
         stats.rays.rays += active.count_ones() as u64;
-        let h = trace::closest(
-            self.scene,
-            &self.tris,
-            &self.tri_prim,
-            &self.balls,
-            o,
-            d,
-            active,
-        );
+        let h = trace::closest(self.scene, &self.tris, &self.balls, o, d, active);
         let hidden = if self.hide_emitters {
             depth.eq(U::splat(0))
         } else {

@@ -66,17 +66,12 @@ impl F {
             ))
         })
     }
-    /// x86's `maxps`: the second operand where either is NaN (glam's SIMD `max`).
-    #[inline(always)]
-    pub fn max_ps(self, o: F) -> F {
-        F(unsafe { _mm512_max_ps(self.0, o.0) })
-    }
-    /// `f32::max` against a number `o` that is not NaN: `o` where `self` is NaN. (Where the
-    /// two are zeros of opposite signs either may come out, as for `f32::max`; no caller
-    /// tells them apart.)
+    /// `f32::max` against a number `o` that is not NaN: `o` where `self` is NaN (x86's
+    /// `maxps` gives its second operand where either is NaN). (Where the two are zeros of
+    /// opposite signs either may come out, as for `f32::max`; no caller tells them apart.)
     #[inline(always)]
     pub fn max_num(self, o: F) -> F {
-        self.max_ps(o)
+        F(unsafe { _mm512_max_ps(self.0, o.0) })
     }
     /// `f32::min` against a number `o` that is not NaN: `o` where `self` is NaN.
     #[inline(always)]
@@ -148,17 +143,6 @@ impl F {
             F(_mm512_castsi512_ps(_mm512_add_epi32(
                 _mm512_castps_si512(self.0),
                 _mm512_set1_epi32(1),
-            )))
-        }
-    }
-    /// `1.0.copysign(x)`: ±1 with the sign bit of x.
-    #[inline(always)]
-    pub fn sign_of(x: F) -> F {
-        unsafe {
-            let sign = _mm512_and_si512(_mm512_castps_si512(x.0), _mm512_set1_epi32(i32::MIN));
-            F(_mm512_castsi512_ps(_mm512_or_si512(
-                sign,
-                _mm512_set1_epi32(0x3f80_0000),
             )))
         }
     }
@@ -303,6 +287,24 @@ pub struct V3 {
 }
 
 impl V3 {
+    /// `f` of each component.
+    #[inline(always)]
+    fn map(self, f: impl Fn(F) -> F) -> V3 {
+        V3 {
+            x: f(self.x),
+            y: f(self.y),
+            z: f(self.z),
+        }
+    }
+    /// `f` of each pair of components.
+    #[inline(always)]
+    fn zip(self, o: V3, f: impl Fn(F, F) -> F) -> V3 {
+        V3 {
+            x: f(self.x, o.x),
+            y: f(self.y, o.y),
+            z: f(self.z, o.z),
+        }
+    }
     #[inline(always)]
     pub fn splat(v: [f32; 3]) -> V3 {
         V3 {
@@ -313,11 +315,7 @@ impl V3 {
     }
     #[inline(always)]
     pub fn zero() -> V3 {
-        V3 {
-            x: F::zero(),
-            y: F::zero(),
-            z: F::zero(),
-        }
+        V3::splat([0.0; 3])
     }
     #[inline(always)]
     pub fn load(a: &[[f32; 16]; 3]) -> V3 {
@@ -354,35 +352,19 @@ impl V3 {
     }
     #[inline(always)]
     pub fn scale(self, s: F) -> V3 {
-        V3 {
-            x: self.x * s,
-            y: self.y * s,
-            z: self.z * s,
-        }
+        self.map(|c| c * s)
     }
     #[inline(always)]
     pub fn div(self, s: F) -> V3 {
-        V3 {
-            x: self.x / s,
-            y: self.y / s,
-            z: self.z / s,
-        }
+        self.map(|c| c / s)
     }
     #[inline(always)]
     pub fn abs(self) -> V3 {
-        V3 {
-            x: self.x.abs(),
-            y: self.y.abs(),
-            z: self.z.abs(),
-        }
+        self.map(F::abs)
     }
     #[inline(always)]
     pub fn select(m: M, a: V3, b: V3) -> V3 {
-        V3 {
-            x: F::select(m, a.x, b.x),
-            y: F::select(m, a.y, b.y),
-            z: F::select(m, a.z, b.z),
-        }
+        a.zip(b, |a, b| F::select(m, a, b))
     }
     /// Lanes where all three components equal zero (`Vec3 == Vec3::ZERO`).
     #[inline(always)]
@@ -415,43 +397,27 @@ impl Add for V3 {
     type Output = V3;
     #[inline(always)]
     fn add(self, o: V3) -> V3 {
-        V3 {
-            x: self.x + o.x,
-            y: self.y + o.y,
-            z: self.z + o.z,
-        }
+        self.zip(o, F::add)
     }
 }
 impl Sub for V3 {
     type Output = V3;
     #[inline(always)]
     fn sub(self, o: V3) -> V3 {
-        V3 {
-            x: self.x - o.x,
-            y: self.y - o.y,
-            z: self.z - o.z,
-        }
+        self.zip(o, F::sub)
     }
 }
 impl Mul for V3 {
     type Output = V3;
     #[inline(always)]
     fn mul(self, o: V3) -> V3 {
-        V3 {
-            x: self.x * o.x,
-            y: self.y * o.y,
-            z: self.z * o.z,
-        }
+        self.zip(o, F::mul)
     }
 }
 impl Neg for V3 {
     type Output = V3;
     #[inline(always)]
     fn neg(self) -> V3 {
-        V3 {
-            x: -self.x,
-            y: -self.y,
-            z: -self.z,
-        }
+        self.map(F::neg)
     }
 }

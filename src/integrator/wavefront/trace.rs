@@ -6,8 +6,9 @@
 //! choose among hits (the spheres first, each bounded by the nearest so far; then the
 //! triangles, bounded by the spheres' nearest; of equally near hits the lowest primitive).
 //! So each ray gets the hit `Scene::intersect` gives it and the answer `Scene::occluded`
-//! gives it, in the scenes it traces by brute force (those `Wavefront::new` takes). Triangle pairs near an edge are decided by the scene's own test
-//! (`Triangle::intersect` with its f64 fallback), as there.
+//! gives it, in the scenes it traces by brute force (those `Wavefront::new` takes).
+//! Triangle pairs near an edge are decided by the scene's own test (`Triangle::intersect`
+//! with its f64 fallback), as there.
 //!
 //! [`TriangleBlock`]: crate::geometry::triangle_block::TriangleBlock
 //! [`Triangle::intersect`]: crate::geometry::Triangle::intersect
@@ -127,7 +128,6 @@ fn ray_of(o: &[[f32; 16]; 3], d: &[[f32; 16]; 3], l: usize) -> Ray {
 pub unsafe fn closest(
     scene: &Scene,
     tris: &[Tri],
-    tri_prim: &[u32; 64],
     balls: &[Ball],
     o: V3,
     d: V3,
@@ -147,7 +147,9 @@ pub unsafe fn closest(
     let bound = F::select(shit, st.next_up(), inf);
     let mut bt = bound;
     let (mut bu, mut bv) = (F::zero(), F::zero());
-    let mut bslot = U::splat(u32::MAX);
+    // (`Wavefront::new` lists the triangles in primitive order: the lower primitive of two
+    // is the earlier slot.)
+    let mut bprim = U::splat(u32::MAX);
     let mut thit: M = 0;
     let mut unsure = Unsure::new();
     let zero = F::zero();
@@ -158,7 +160,7 @@ pub unsafe fn closest(
         bt = F::select(hit, t, bt);
         bu = F::select(hit, u, bu);
         bv = F::select(hit, v, bv);
-        bslot = U::select(hit, U::splat(j as u32), bslot);
+        bprim = U::select(hit, U::splat(tri.prim), bprim);
         thit |= hit;
         let uns = !(clear | out) & active;
         if uns != 0 {
@@ -174,18 +176,17 @@ pub unsafe fn closest(
             &d,
             &unsure,
             bound,
-            (&mut thit, &mut bslot, &mut bt, &mut bu, &mut bv),
+            (&mut thit, &mut bprim, &mut bt, &mut bu, &mut bv),
         );
     }
     // A triangle's hit wins if nearer than the spheres', or as near and of a lower
     // primitive (`Flat::result`).
-    let tprim = U::lookup64(tri_prim, bslot);
-    let tri = thit & (!shit | bt.lt(st) | (bt.eq(st) & tprim.lt(sprim)));
+    let tri = thit & (!shit | bt.lt(st) | (bt.eq(st) & bprim.lt(sprim)));
     let sphere = shit & !tri;
     Hits {
         hit: tri | sphere,
         sphere,
-        prim: U::select(tri, tprim, sprim),
+        prim: U::select(tri, bprim, sprim),
         t: F::select(tri, bt, st),
         u: F::select(tri, bu, zero),
         v: F::select(tri, bv, zero),
@@ -193,7 +194,7 @@ pub unsafe fn closest(
 }
 
 /// The pairs near an edge, decided by the scene's test before the lane's `bound` and kept
-/// where nearer than the lane's triangle hit (or as near and of a lower slot).
+/// where nearer than the lane's triangle hit (or as near and of a lower primitive).
 #[cold]
 #[inline(never)]
 #[target_feature(enable = "avx512f")]
@@ -204,25 +205,25 @@ unsafe fn settle(
     d: &V3,
     unsure: &Unsure,
     bound: F,
-    (hit, slot, t, u, v): (&mut M, &mut U, &mut F, &mut F, &mut F),
+    (hit, prim, t, u, v): (&mut M, &mut U, &mut F, &mut F, &mut F),
 ) {
     let (mut oa, mut da) = ([[0f32; 16]; 3], [[0f32; 16]; 3]);
     o.store(&mut oa);
     d.store(&mut da);
     let bound = bound.to_array();
     let (mut ta, mut ua, mut va) = (t.to_array(), u.to_array(), v.to_array());
-    let mut sa = [0u32; 16];
-    slot.store(&mut sa);
+    let mut pa = [0u32; 16];
+    prim.store(&mut pa);
     for &(lanes, j) in &unsure.list[..unsure.n] {
         let mut m = lanes;
         while m != 0 {
             let l = m.trailing_zeros() as usize;
             m &= m - 1;
             let ray = ray_of(&oa, &da, l);
-            let prim = tris[j as usize].prim as usize;
-            if let Some((tt, uu, vv)) = scene.hit(&ray, prim, bound[l]) {
-                if tt < ta[l] || (tt == ta[l] && (j as u32) < sa[l]) {
-                    (ta[l], ua[l], va[l], sa[l]) = (tt, uu, vv, j as u32);
+            let p = tris[j as usize].prim;
+            if let Some((tt, uu, vv)) = scene.hit(&ray, p as usize, bound[l]) {
+                if tt < ta[l] || (tt == ta[l] && p < pa[l]) {
+                    (ta[l], ua[l], va[l], pa[l]) = (tt, uu, vv, p);
                     *hit |= 1 << l;
                 }
             }
@@ -231,7 +232,7 @@ unsafe fn settle(
     *t = F::load(&ta);
     *u = F::load(&ua);
     *v = F::load(&va);
-    *slot = U::load(&sa);
+    *prim = U::load(&pa);
 }
 
 /// The lanes of `active` whose rays are blocked before `t_max` (`Scene::occluded`).
