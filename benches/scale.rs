@@ -5,7 +5,8 @@
 //!     cargo bench --bench scale            (all four sizes; about a minute and 2 GB at 10 M)
 //!     cargo bench --bench scale -- 1000000 (sizes up to this count)
 //!     cargo bench --bench scale -- 1000000 --build-only  (no renders)
-//!     cargo bench --bench scale -- --phases  (also the wall time of each build phase)
+//!     cargo bench --bench scale -- --phases  (also the wall time of each build phase, and
+//!                                             the build's peak memory on Linux)
 //!     cargo bench --bench scale -- --builds 5  (the fastest of five builds of each size)
 
 #[path = "common.rs"]
@@ -46,22 +47,29 @@ fn main() {
         let desc = common::bunny_scene(mesh);
         // (The copy is the benchmark's, so that `desc` can be dropped after the build; it is
         // not part of the build.) With `--builds K`, the fastest of K builds counts.
-        let mut fastest: Option<(f64, Scene)> = None;
+        let mut fastest: Option<(f64, Scene, Option<(u64, u64)>)> = None;
         for _ in 0..builds.max(1) {
             let copy = desc.clone();
+            let start = reset_peak_rss();
             let t = Instant::now();
             let scene = Scene::build(copy);
             let build = t.elapsed().as_secs_f64();
-            if fastest.as_ref().is_none_or(|(b, _)| build < *b) {
-                fastest = Some((build, scene));
+            let peak = start.zip(peak_rss());
+            if fastest.as_ref().is_none_or(|(b, _, _)| build < *b) {
+                fastest = Some((build, scene, peak));
             }
         }
-        let (build, scene) = fastest.unwrap();
+        let (build, scene, peak) = fastest.unwrap();
         let bytes = scene.memory_bytes() as f64 / scene.prim_count() as f64;
         phase_lines.push(format!(
-            "{} triangles: {}",
+            "{} triangles: {}{}",
             scene.prim_count(),
-            scene.build_times.summary()
+            scene.build_times.summary(),
+            peak.map_or(String::new(), |(s, p)| format!(
+                "; resident memory {} MB before, at most {} MB during the build",
+                s >> 20,
+                p >> 20
+            ))
         ));
         if build_only {
             println!(
@@ -107,4 +115,23 @@ fn main() {
             println!("{l}");
         }
     }
+}
+
+/// Resets the process's peak resident memory to its current size (Linux: `clear_refs`), and
+/// returns that size in bytes; None where the kernel offers no such thing.
+fn reset_peak_rss() -> Option<u64> {
+    std::fs::write("/proc/self/clear_refs", "5").ok()?;
+    status_bytes("VmRSS:")
+}
+
+/// The process's peak resident memory in bytes since the last reset (Linux).
+fn peak_rss() -> Option<u64> {
+    status_bytes("VmHWM:")
+}
+
+fn status_bytes(field: &str) -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = s.lines().find(|l| l.starts_with(field))?;
+    let kb: u64 = line[field.len()..].trim().trim_end_matches("kB").trim().parse().ok()?;
+    Some(kb << 10)
 }

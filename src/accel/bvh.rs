@@ -38,6 +38,11 @@ pub struct PrimRef {
 }
 
 impl PrimRef {
+    /// A placeholder, overwritten before it is read.
+    const EMPTY: PrimRef = PrimRef {
+        lo: Vec4::ZERO,
+        hi: Vec4::ZERO,
+    };
     /// The caller's primitive `index`, with bounds `b`; a `costly` one (a sphere, whose test
     /// costs several triangles') is never merged into a leaf with others. (The flag rides in
     /// the upper corner's spare lane as 0 or 1, which no decision reads.)
@@ -208,6 +213,14 @@ impl Bvh {
     pub fn prim_range(&self, n: &BvhNode) -> (u32, u32) {
         (n.first & !COSTLY, n.prims())
     }
+    /// The order of the primitives, the nodes freed.
+    pub fn into_order(self) -> Vec<u32> {
+        self.order
+    }
+    /// The bounds of every primitive together (None without primitives).
+    pub fn bounds(&self) -> Option<Aabb> {
+        (!self.is_empty()).then(|| self.node(0).bounds())
+    }
 }
 
 const BINS: usize = 16;
@@ -230,12 +243,26 @@ const PARALLEL_MIN: usize = 1 << 14;
 const SAMPLE_MIN: usize = 1 << 11;
 const SAMPLES: usize = 1 << 10;
 
-/// Builds the binary tree over `refs`: over the primitives themselves, or over clusters of
-/// them when there are at least [`CLUSTER_MIN`]. Marks its phases in `times`.
-pub fn build(mut refs: Vec<PrimRef>, times: &mut BuildTimes) -> Bvh {
-    if refs.len() >= CLUSTER_MIN {
-        cluster::build(refs, times)
+/// Builds the binary tree over the primitives `0..n`, whose references `prim` gives (it is
+/// asked for each one several times, and must give the same answer each time): over the
+/// primitives themselves, or over clusters of them when there are at least
+/// [`CLUSTER_MIN`]. Marks its phases in `times`.
+///
+/// The references are asked for, not passed in an array, because an array of them is the
+/// build's largest (32 bytes a primitive, twice over once sorted along the curve), and on
+/// hosts that charge dearly for memory a process touches first (see docs/performance.md,
+/// "Fresh memory on this VM") computing a triangle's bounds again from its three vertices
+/// costs far less than storing them.
+pub fn build<F>(n: usize, prim: F, times: &mut BuildTimes) -> Bvh
+where
+    F: Fn(u32) -> PrimRef + Sync,
+{
+    assert!(n < 1 << 27, "too many primitives");
+    if n >= CLUSTER_MIN {
+        cluster::build(n, &prim, times)
     } else {
+        let mut refs: Vec<PrimRef> = (0..n as u32).map(&prim).collect();
+        times.mark("bounds");
         let bvh = build_sah(&mut refs);
         times.mark("binary SAH tree");
         bvh

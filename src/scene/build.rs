@@ -142,23 +142,14 @@ impl Scene {
             }
         };
         times.mark("primitives");
-        let mut refs: Vec<PrimRef> = huge_pages::with_capacity(tris.len());
-        tris.par_iter()
-            .enumerate()
-            .with_min_len(1 << 12)
-            .map(|(i, idx)| PrimRef::new(&bounds_of(idx), i as u32, idx[0] == SPHERE))
-            .collect_into_vec(&mut refs);
-        // (Minimum and maximum are exact, so any grouping of this reduction gives the same.)
-        let world = refs
-            .par_iter()
-            .with_min_len(1 << 12)
-            .map(PrimRef::bounds)
-            .reduce(|| Aabb::EMPTY, |a, b| Aabb::union(&a, &b));
-        let radius = if tris.is_empty() {
-            1.0
-        } else {
-            0.5 * (world.max - world.min).length()
+        let prim = |i: u32| {
+            let idx = &tris[i as usize];
+            PrimRef::new(&bounds_of(idx), i, idx[0] == SPHERE)
         };
+        let bvh = bvh::build(tris.len(), prim, &mut times);
+        let radius = bvh
+            .bounds()
+            .map_or(1.0, |world| 0.5 * (world.max - world.min).length());
         let others = desc
             .lights
             .iter()
@@ -182,16 +173,17 @@ impl Scene {
             .collect();
         // The padding vertex that `Scene::vertex_fast` may read past the last one.
         positions.push(glam::Vec3::ZERO);
-        times.mark("bounds");
-        let bvh = bvh::build(refs, &mut times);
-        let order = &bvh.order;
-        let tris = permuted(&tris, order);
-        times.mark("reorder");
         let wide = WideBvh::from_binary(&bvh);
         times.mark("4-wide collapse");
+        // The binary tree's nodes go before the triangles are reordered, and each array
+        // before its reordered copy is used, so that the copies reuse memory the build has
+        // touched already (see `bvh::build` on fresh memory).
+        let order = bvh.into_order();
+        let tris = permuted(tris, &order);
+        let meta = permuted(meta, &order);
+        times.mark("reorder");
         #[cfg(target_arch = "x86_64")]
         let flat = flat(&tris, &positions);
-        let meta = permuted(&meta, order);
         // `emitting` is sorted by primitive.
         let emitters = if emitting.is_empty() {
             Vec::new()
@@ -305,7 +297,7 @@ pub(super) fn flat_with(
 }
 
 /// `v` in the BVH's `order` (item i is `v[order[i]]`).
-fn permuted<T: Copy + Send + Sync>(v: &[T], order: &[u32]) -> Vec<T> {
+fn permuted<T: Copy + Send + Sync>(v: Vec<T>, order: &[u32]) -> Vec<T> {
     let mut out = huge_pages::with_capacity(order.len());
     order
         .par_iter()

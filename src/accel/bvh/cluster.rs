@@ -21,7 +21,7 @@ use super::{
     MAX_DEPTH,
 };
 use crate::accel::wide::merges;
-use crate::accel::{huge_pages, prefetch, BuildTimes};
+use crate::accel::{huge_pages, BuildTimes};
 use crate::geometry::Aabb;
 use glam::Vec3A;
 use rayon::prelude::*;
@@ -39,33 +39,35 @@ const CHUNK: usize = 1 << 16;
 const CODE_BITS: u32 = 30;
 const RADIX_BITS: u32 = 10;
 
-/// The tree over `refs`: clusters of neighbours on the Morton curve, the binned SAH tree over
-/// the clusters (each counting for its primitives), and below each cluster the SAH tree over
-/// its own primitives. Nodes count primitives, as in a tree built over them directly.
-pub(super) fn build(refs: Vec<PrimRef>, times: &mut BuildTimes) -> Bvh {
-    let keys = sorted_keys(&refs);
+/// The tree over the primitives `0..n` (`prim` gives each one's reference): clusters of
+/// neighbours on the Morton curve, the binned SAH tree over the clusters (each counting for
+/// its primitives), and below each cluster the SAH tree over its own primitives. Nodes count
+/// primitives, as in a tree built over them directly. No array of the primitives'
+/// references is kept: each phase asks `prim` again for those it needs (see [`super::build`]).
+pub(super) fn build<F>(n: usize, prim: &F, times: &mut BuildTimes) -> Bvh
+where
+    F: Fn(u32) -> PrimRef + Sync,
+{
+    let keys = sorted_keys(n, prim);
     times.mark("Morton sort");
-    let sorted = gather(&refs, &keys);
-    drop(refs);
-    drop(keys);
     // Clusters: runs of consecutive primitives, formed in fixed chunks of the curve (so the
     // result depends on the input only, not on the threads).
-    let parts: Vec<(Vec<u32>, Vec<PrimRef>)> = sorted
+    let parts: Vec<(Vec<u32>, Vec<PrimRef>)> = keys
         .par_chunks(CHUNK)
         .enumerate()
-        .map(|(c, chunk)| clusters_of(chunk, (c * CHUNK) as u32))
+        .map(|(c, chunk)| clusters_of(chunk, (c * CHUNK) as u32, prim))
         .collect();
-    let (start, mut clusters) = concatenate(parts, sorted.len());
+    let (start, mut clusters) = concatenate(parts, n);
     times.mark("clusters");
-    let n = sorted.len();
     let mut nodes: Vec<MaybeUninit<BvhNode>> = huge_pages::with_capacity(2 * n);
     // SAFETY: MaybeUninit needs no initialisation.
     unsafe { nodes.set_len(2 * n) };
     let mut order = huge_pages::zeroed(n);
     let (b, cb) = bounds_of(&clusters);
     let kind = Clusters {
-        sorted: &sorted,
+        keys: &keys,
         start: &start,
+        prim,
         merge_weight: crate::accel::wide::merge_weight(n, &b),
     };
     let _ = build_node(&kind, &mut nodes, &mut order, &mut clusters, 0, 0, b, cb);
@@ -75,16 +77,18 @@ pub(super) fn build(refs: Vec<PrimRef>, times: &mut BuildTimes) -> Bvh {
 
 /// Clusters of primitives: a leaf of the tree over them is one cluster, under which the
 /// tree over its primitives is built.
-struct Clusters<'a> {
-    /// The primitives in Morton order: cluster `c` is `sorted[start[c]..start[c + 1]]`.
-    sorted: &'a [PrimRef],
+struct Clusters<'a, F> {
+    /// The sorted keys, whose low halves are the primitives in Morton order: cluster `c` is
+    /// the primitives of `keys[start[c]..start[c + 1]]`.
+    keys: &'a [u64],
     start: &'a [u32],
+    prim: &'a F,
     /// The wide collapse's merge weight: subtrees it would merge into one leaf are built
     /// as that leaf (see [`run_tree`]).
     merge_weight: f32,
 }
 
-impl Kind for Clusters<'_> {
+impl<F: Fn(u32) -> PrimRef + Sync> Kind for Clusters<'_, F> {
     const MAX_LEAF: usize = 1;
     const UNIT: bool = false;
     #[inline(always)]
@@ -102,11 +106,15 @@ impl Kind for Clusters<'_> {
     ) -> Sub {
         debug_assert_eq!(refs.len(), 1);
         let c = refs[0].index() as usize;
-        let range = self.start[c] as usize..self.start[c + 1] as usize;
+        let keys = &self.keys[self.start[c] as usize..self.start[c + 1] as usize];
+        let mut prims = [PrimRef::EMPTY; CLUSTER_SIZE];
+        for (p, &k) in prims.iter_mut().zip(keys) {
+            *p = (self.prim)(k as u32);
+        }
         run_tree(
             nodes,
             order,
-            &self.sorted[range],
+            &prims[..keys.len()],
             first,
             depth,
             bounds,
@@ -204,29 +212,6 @@ fn run_tree(
     finish(head, a.join(b))
 }
 
-/// The primitives in the order of the sorted keys (whose low halves are their indices).
-/// Each read is a random access into `refs`, so the loop prefetches the reference it will
-/// read sixteen keys later.
-fn gather(refs: &[PrimRef], keys: &[u64]) -> Vec<PrimRef> {
-    const AHEAD: usize = 16;
-    const CHUNK: usize = 1 << 14;
-    let mut out = huge_pages::with_capacity(keys.len());
-    out.spare_capacity_mut()[..keys.len()]
-        .par_chunks_mut(CHUNK)
-        .zip(keys.par_chunks(CHUNK))
-        .for_each(|(o, c)| {
-            for (i, (o, &k)) in o.iter_mut().zip(c).enumerate() {
-                if let Some(&next) = c.get(i + AHEAD) {
-                    prefetch(&refs[next as u32 as usize]);
-                }
-                o.write(refs[k as u32 as usize]);
-            }
-        });
-    // SAFETY: the loop wrote every item below keys.len().
-    unsafe { out.set_len(keys.len()) };
-    out
-}
-
 /// The chunks' clusters one after the other: each cluster's first primitive (and, last, the
 /// number of primitives), and the clusters with their indices set.
 fn concatenate(parts: Vec<(Vec<u32>, Vec<PrimRef>)>, prims: usize) -> (Vec<u32>, Vec<PrimRef>) {
@@ -266,18 +251,21 @@ fn concatenate(parts: Vec<(Vec<u32>, Vec<PrimRef>)>, prims: usize) -> (Vec<u32>,
     (start, clusters)
 }
 
-/// The clusters of one chunk of the primitives in Morton order, whose first is the `base`-th:
-/// each cluster's first position, and a reference to it with its weight (its index is set
-/// by the caller). A cluster takes the next primitive while it has fewer than
-/// `CLUSTER_SIZE` and its bounds' surface area stays within `CLUSTER_AREA` times the sum of
-/// its primitives' (so it never spans a jump of the curve).
-fn clusters_of(chunk: &[PrimRef], base: u32) -> (Vec<u32>, Vec<PrimRef>) {
+/// The clusters of one chunk of the sorted keys, whose first is the `base`-th: each
+/// cluster's first position, and a reference to it with its weight (its index is set by the
+/// caller). A cluster takes the next primitive while it has fewer than `CLUSTER_SIZE` and
+/// its bounds' surface area stays within `CLUSTER_AREA` times the sum of its primitives' (so
+/// it never spans a jump of the curve).
+fn clusters_of<F>(chunk: &[u64], base: u32, prim: &F) -> (Vec<u32>, Vec<PrimRef>)
+where
+    F: Fn(u32) -> PrimRef,
+{
     let mut starts = vec![base];
     let mut out = Vec::with_capacity(chunk.len() / 2 + 1);
-    let mut cb = chunk[0].bounds();
+    let mut cb = prim(chunk[0] as u32).bounds();
     let (mut sum, mut len) = (cb.surface_area(), 1);
-    for (i, r) in chunk.iter().enumerate().skip(1) {
-        let b = r.bounds();
+    for (i, &k) in chunk.iter().enumerate().skip(1) {
+        let b = prim(k as u32).bounds();
         let u = Aabb::union(&cb, &b);
         let a = b.surface_area();
         if len == CLUSTER_SIZE || u.surface_area() > CLUSTER_AREA * (sum + a) {
@@ -294,13 +282,16 @@ fn clusters_of(chunk: &[PrimRef], base: u32) -> (Vec<u32>, Vec<PrimRef>) {
 
 /// The primitives' keys (Morton code of the centroid in the high 32 bits, index in the low),
 /// sorted. Keys are distinct, so the order is unique.
-fn sorted_keys(refs: &[PrimRef]) -> Vec<u64> {
-    let cb = refs
-        .par_iter()
+fn sorted_keys<F>(n: usize, prim: &F) -> Vec<u64>
+where
+    F: Fn(u32) -> PrimRef + Sync,
+{
+    let cb = (0..n as u32)
+        .into_par_iter()
         .with_min_len(1 << 12)
-        .map(|r| Aabb {
-            min: r.c2(),
-            max: r.c2(),
+        .map(|i| {
+            let c = prim(i).c2();
+            Aabb { min: c, max: c }
         })
         .reduce(|| Aabb::EMPTY, |a, b| Aabb::union(&a, &b));
     let ext = cb.extent();
@@ -310,13 +301,14 @@ fn sorted_keys(refs: &[PrimRef]) -> Vec<u64> {
         Vec3A::splat(steps * (1.0 - 1e-6)) / ext,
         Vec3A::ZERO,
     );
-    let mut keys: Vec<u64> = huge_pages::with_capacity(refs.len());
-    refs.par_iter()
+    let mut keys: Vec<u64> = huge_pages::with_capacity(n);
+    (0..n as u32)
+        .into_par_iter()
         .with_min_len(1 << 12)
-        .map(|r| {
-            let q = ((r.c2() - cb.min) * scale).min(Vec3A::splat(steps - 1.0));
+        .map(|i| {
+            let q = ((prim(i).c2() - cb.min) * scale).min(Vec3A::splat(steps - 1.0));
             let code = spread(q.x as u32) | spread(q.y as u32) << 1 | spread(q.z as u32) << 2;
-            (code as u64) << 32 | r.index() as u64
+            (code as u64) << 32 | i as u64
         })
         .collect_into_vec(&mut keys);
     radix_sort_high(&mut keys);
@@ -429,12 +421,8 @@ mod tests {
     /// `MAX_DEPTH`.
     fn check_tree(boxes: &[Aabb]) {
         let n = boxes.len();
-        let refs: Vec<PrimRef> = boxes
-            .iter()
-            .enumerate()
-            .map(|(i, b)| PrimRef::new(b, i as u32, false))
-            .collect();
-        let bvh = build(refs, &mut BuildTimes::start());
+        let prim = |i: u32| PrimRef::new(&boxes[i as usize], i, false);
+        let bvh = build(n, &prim, &mut BuildTimes::start());
         let mut seen = vec![false; n];
         let mut stack = vec![(0usize, 1usize)];
         while let Some((i, depth)) = stack.pop() {
