@@ -57,18 +57,22 @@ impl PrimRef {
     fn costly(&self) -> bool {
         self.hi.w != 0.0
     }
-    /// A reference to a cluster of `weight` primitives (the weight in the upper corner's
-    /// spare lane as a float: a normal number, unlike the index's bits).
+    /// A reference to a cluster of `prims` primitives (fewer than 16) whose own tree takes
+    /// `slots` nodes (fewer than 16), both in the upper corner's spare lane as one small
+    /// whole float: a normal number, unlike the index's bits.
     #[inline]
-    fn cluster(b: &Aabb, index: u32, weight: u32) -> Self {
+    fn cluster(b: &Aabb, index: u32, prims: u32, slots: u32) -> Self {
+        debug_assert!(prims < 16 && slots < 16);
         PrimRef {
             lo: b.min.extend(f32::from_bits(index)),
-            hi: b.max.extend(weight as f32),
+            hi: b.max.extend((prims | slots << 4) as f32),
         }
     }
+    /// A cluster's primitives and nodes, as [`Weight`].
     #[inline(always)]
-    fn weight(&self) -> u32 {
-        self.hi.w as u32
+    fn cluster_weight(&self) -> Weight {
+        let w = self.hi.w as u64;
+        weight(w & 15, w >> 4)
     }
     /// The lower corner, with the index lane cleared. The index's bits, read as an f32, are
     /// a subnormal number, and any arithmetic on one (the centroid sums, the extents of the
@@ -102,10 +106,11 @@ impl PrimRef {
 
 /// One node of the binary tree (32 bytes). `count` holds the number of primitives under it
 /// (the low 27 bits; there are fewer than 2²⁷), the number of leaves of its subtree up to 15
-/// (bits 27 to 30) and [`LEAF_FLAG`] on leaves, which hold the primitives
-/// `first..first + prims()`; `first` holds, in its top bit, whether a costly primitive lies
-/// under it. The collapse reads from these what it needs of a subtree (whether a small one
-/// becomes a leaf) without walking it.
+/// (bits 27 to 30) and [`LEAF_FLAG`] on leaves. A leaf holds the primitives
+/// `first..first + prims()` of the order; an inner node's `first` is the distance from it to
+/// its right child (its left child follows it). `first` holds, in its top bit, whether a
+/// costly primitive lies under the node. The collapse reads from these what it needs of a
+/// subtree (whether a small one becomes a leaf) without walking it.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(32))]
 pub struct BvhNode {
@@ -177,8 +182,10 @@ fn finish(node: &mut MaybeUninit<BvhNode>, sub: Sub) -> Sub {
     sub
 }
 
-/// The binary tree: node 0 is the root; an inner node `i`'s children are `i + 1` and
-/// `i + 2 · prims(i + 1)`. Slots no node landed in stay uninitialised and are never read.
+/// The binary tree: node 0 is the root; an inner node `i`'s children are `i + 1` and the
+/// node its `first` names. Each subtree takes a run of slots of its own. Slots no node
+/// landed in (under a leaf of several primitives) stay uninitialised and are never read;
+/// the tree over clusters has none.
 pub struct Bvh {
     nodes: Vec<MaybeUninit<BvhNode>>,
     /// `order[i]` is the caller's index of the BVH's i-th primitive.
@@ -200,18 +207,28 @@ impl Bvh {
             super::prefetch(n);
         }
     }
+    /// The right child of inner node `i`.
     #[inline]
     pub fn right(&self, i: usize) -> usize {
-        i + 2 * self.node(i + 1).prims() as usize
+        i + (self.node(i).first & !COSTLY) as usize
+    }
+    /// The number of nodes.
+    pub fn len(&self) -> usize {
+        self.nodes.len()
     }
     pub fn is_empty(&self) -> bool {
         self.order.is_empty()
     }
-    /// The primitives under node `n` (which must be a node of this tree): the position of
-    /// the first in `order`, and their count.
+    /// The primitives under node `i`: the position of the first in `order`, and their
+    /// count. (An inner node's first primitive is its leftmost leaf's, which for the small
+    /// subtrees the collapse asks about lies a node or two after it.)
     #[inline]
-    pub fn prim_range(&self, n: &BvhNode) -> (u32, u32) {
-        (n.first & !COSTLY, n.prims())
+    pub fn prim_range(&self, i: usize) -> (u32, u32) {
+        let mut k = i;
+        while !self.node(k).is_leaf() {
+            k += 1;
+        }
+        (self.node(k).first & !COSTLY, self.node(i).prims())
     }
     /// The order of the primitives, the nodes freed.
     pub fn into_order(self) -> Vec<u32> {
@@ -272,9 +289,10 @@ where
 /// The binary SAH tree over the primitives `refs` (which it reorders).
 fn build_sah(refs: &mut [PrimRef]) -> Bvh {
     let n = refs.len();
-    let mut nodes: Vec<MaybeUninit<BvhNode>> = Vec::with_capacity((2 * n).max(1));
+    let slots = (2 * n).max(1) - 1;
+    let mut nodes: Vec<MaybeUninit<BvhNode>> = Vec::with_capacity(slots);
     // SAFETY: MaybeUninit needs no initialisation.
-    unsafe { nodes.set_len((2 * n).max(1)) };
+    unsafe { nodes.set_len(slots) };
     let mut order = vec![0; n];
     if n > 0 {
         let (b, cb) = bounds_of(refs);
@@ -290,12 +308,15 @@ trait Kind: Sync {
     const MAX_LEAF: usize;
     /// Whether every reference stands for one primitive.
     const UNIT: bool;
-    /// The number of primitives `r` stands for.
-    fn weight(r: &PrimRef) -> u32;
+    /// Depth below which the build splits at the object median (so that no path passes
+    /// [`MAX_DEPTH`], leaving room for the trees under the leaves).
+    const MEDIAN_DEPTH: usize;
+    /// The primitives `r` stands for, and its nodes.
+    fn weight(r: &PrimRef) -> Weight;
     /// Writes the subtree of a leaf over `refs` (at most `MAX_LEAF` of them, whose
     /// primitives are `first..first + order.len()` of the final order, `bounds` their
-    /// bounds) into `nodes`, and their primitives' indices, in the tree's order, into
-    /// `order`; returns what its parent records of it.
+    /// bounds) into `nodes` (exactly the slots their weights name), and their primitives'
+    /// indices, in the tree's order, into `order`; returns what its parent records of it.
     fn leaf(
         &self,
         nodes: &mut [MaybeUninit<BvhNode>],
@@ -313,9 +334,10 @@ struct Prims;
 impl Kind for Prims {
     const MAX_LEAF: usize = MAX_LEAF;
     const UNIT: bool = true;
+    const MEDIAN_DEPTH: usize = MAX_DEPTH - 32;
     #[inline(always)]
-    fn weight(_: &PrimRef) -> u32 {
-        1
+    fn weight(_: &PrimRef) -> Weight {
+        PRIM
     }
     #[inline]
     fn leaf(
@@ -341,6 +363,33 @@ impl Kind for Prims {
     }
 }
 
+/// What references stand for, summed: primitives in the low 32 bits, and in the high 32
+/// the slots their subtrees take plus one each, so that the subtree over a set of
+/// references takes [`slots_of`] their sum (a primitive's subtree is one leaf: two, and
+/// the n − 1 inner nodes above n leaves make the sum minus one). The sums stay below
+/// 2³² on both sides, as there are fewer than 2²⁷ primitives, each of whose subtrees
+/// takes fewer than 16 slots.
+pub(crate) type Weight = u64;
+
+/// A weight of `prims` primitives whose subtree takes `slots` nodes.
+#[inline(always)]
+const fn weight(prims: u64, slots: u64) -> Weight {
+    prims | (slots + 1) << 32
+}
+/// A primitive's weight: one primitive, one leaf.
+const PRIM: Weight = weight(1, 1);
+
+/// The primitives of a weight.
+#[inline(always)]
+fn prims_of(w: Weight) -> usize {
+    w as u32 as usize
+}
+/// The slots of the subtree over references of total weight `w`.
+#[inline(always)]
+fn slots_of(w: Weight) -> usize {
+    (w >> 32) as usize - 1
+}
+
 /// Bounds of the primitives and of their (doubled) centroids.
 #[inline]
 fn bounds_of(refs: &[PrimRef]) -> (Aabb, Aabb) {
@@ -350,7 +399,7 @@ fn bounds_of(refs: &[PrimRef]) -> (Aabb, Aabb) {
 
 /// [`bounds_of`], and the references' total `weight`.
 #[inline(always)]
-fn bounds_weight_of(refs: &[PrimRef], weight: impl Fn(&PrimRef) -> u32) -> (Aabb, Aabb, usize) {
+fn bounds_weight_of(refs: &[PrimRef], weight: impl Fn(&PrimRef) -> Weight) -> (Aabb, Aabb, Weight) {
     let mut b = Aabb::EMPTY;
     let mut cb = Aabb::EMPTY;
     let mut w = 0;
@@ -358,7 +407,7 @@ fn bounds_weight_of(refs: &[PrimRef], weight: impl Fn(&PrimRef) -> u32) -> (Aabb
         b.min = b.min.min(r.lo());
         b.max = b.max.max(r.hi());
         cb.grow_point(r.c2());
-        w += weight(r) as usize;
+        w += weight(r);
     }
     (b, cb, w)
 }
@@ -372,11 +421,11 @@ fn leaf(b: &Aabb, first: usize, count: usize) -> BvhNode {
     }
 }
 
-/// An inner node over `count` primitives.
-fn inner(b: &Aabb, first: usize, count: usize) -> BvhNode {
+/// An inner node over `count` primitives whose right child lies `right` slots after it.
+fn inner(b: &Aabb, right: usize, count: usize) -> BvhNode {
     BvhNode {
         min: b.min.to_array(),
-        first: first as u32,
+        first: right as u32,
         max: b.max.to_array(),
         count: count as u32,
     }
@@ -402,7 +451,7 @@ fn build_node<K: Kind>(
         return kind.leaf(nodes, order, refs, first, depth, &bounds);
     }
     let cext = cbounds.extent();
-    if depth >= MAX_DEPTH - 32 || cext.max_element() <= 0.0 {
+    if depth >= K::MEDIAN_DEPTH || cext.max_element() <= 0.0 {
         if n <= K::MAX_LEAF {
             return kind.leaf(nodes, order, refs, first, depth, &bounds);
         }
@@ -493,8 +542,8 @@ fn interior_at<K: Kind>(
     )
 }
 
-/// Writes an inner node over `refs`, split at `mid` (the left side standing for `wl`
-/// primitives), and builds its children (in parallel when both are large).
+/// Writes an inner node over `refs`, split at `mid` (the left side of weight `wl`), and
+/// builds its children (in parallel when both are large).
 #[allow(clippy::too_many_arguments)]
 fn interior<K: Kind>(
     kind: &K,
@@ -505,16 +554,17 @@ fn interior<K: Kind>(
     depth: usize,
     bounds: &Aabb,
     mid: usize,
-    wl: usize,
+    wl: Weight,
     (lb, lc): (Aabb, Aabb),
     (rb, rc): (Aabb, Aabb),
 ) -> Sub {
     let w = order.len();
-    // (The primitives on the left, not the references, lay out the nodes and the order.)
+    // (The weight on the left, not the references, lays out the nodes and the order.)
+    let (sl, wl) = (slots_of(wl), prims_of(wl));
     let (head, rest) = nodes.split_first_mut().unwrap();
-    head.write(inner(bounds, first, w));
+    head.write(inner(bounds, 1 + sl, w));
     let (left, right) = refs.split_at_mut(mid);
-    let (ln, rn) = rest.split_at_mut(2 * wl - 1);
+    let (ln, rn) = rest.split_at_mut(sl);
     let (lo, ro) = order.split_at_mut(wl);
     let d = depth + 1;
     let (a, b) = if wl.min(w - wl) >= PARALLEL_MIN {
@@ -585,13 +635,13 @@ mod tests {
         for axis in 0..3 {
             for limit in [1.0f32, 5.0, 15.0] {
                 let mut v = refs.clone();
-                let weight = |r: &PrimRef| r.index() % 3 + 1;
+                let weight = |r: &PrimRef| weight(r.index() as u64 % 3 + 1, r.index() as u64 % 5);
                 let (mid, wl, (lb, lc), (rb, rc)) =
                     partition(&mut v, cb.min, scale, axis, limit, weight);
                 let left = |r: &PrimRef| ((r.c2() - cb.min) * scale)[axis] < limit;
                 assert!(v[..mid].iter().all(left) && !v[mid..].iter().any(left));
-                let w: u32 = v[..mid].iter().map(weight).sum();
-                assert_eq!(wl, w as usize);
+                let w: Weight = v[..mid].iter().map(weight).sum();
+                assert_eq!(wl, w);
                 let mut seen: Vec<u32> = v.iter().map(PrimRef::index).collect();
                 seen.sort();
                 assert_eq!(seen, (0..1000).collect::<Vec<u32>>());

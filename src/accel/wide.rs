@@ -113,7 +113,7 @@ impl WideBvh {
             parallel_min: PARALLEL_MIN.max(root.prims() / PARALLEL_SHARE),
         };
         if root.is_leaf() {
-            let (first, count) = b.prim_range(root);
+            let (first, count) = b.prim_range(0);
             w.root = leaf_ref(first, count);
         } else {
             w.nodes = c.top();
@@ -464,7 +464,7 @@ impl Collapse<'_> {
                 node.bounds[2 * axis + 1][slot] = kn.max[axis];
             }
             if area < 0.0 {
-                let (first, count) = b.prim_range(kn);
+                let (first, count) = b.prim_range(k);
                 node.child[slot] = leaf_ref(first, count);
             }
         }

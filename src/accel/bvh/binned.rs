@@ -2,7 +2,9 @@
 //! bins swept for the cheapest split by the SAH (Wald, "On fast Construction of SAH-based
 //! Bounding Volume Hierarchies", RT 2007), and the in-place partition by that split.
 
-use super::{bounds_of, bounds_weight_of, half_area, PrimRef, BINS, SAMPLES, SAMPLE_MIN};
+use super::{
+    bounds_of, bounds_weight_of, half_area, prims_of, PrimRef, Weight, BINS, SAMPLES, SAMPLE_MIN,
+};
 use crate::geometry::Aabb;
 use glam::Vec3A;
 
@@ -43,14 +45,14 @@ pub struct Split {
 /// The cheapest split of `refs` by the binned SAH (Wald 2007): their doubled centroids binned
 /// along all three axes in one pass (over a fixed sample of a large node; fewer bins for
 /// fewer references), each bin's bounds and weight swept from both ends. `weight` is what a
-/// reference counts for in the SAH (1 for a primitive, its primitive count for a cluster);
-/// `cbounds` bounds the doubled centroids. `None` where no bin boundary has references on
+/// reference stands for; its primitives (1 for a primitive, its primitive count for a
+/// cluster) count in the SAH. `cbounds` bounds the doubled centroids. `None` where no bin boundary has references on
 /// both sides (every centroid in one bin along every axis).
 #[inline]
 pub fn binned_split(
     refs: &[PrimRef],
     cbounds: &Aabb,
-    weight: impl Fn(&PrimRef) -> u32,
+    weight: impl Fn(&PrimRef) -> Weight,
 ) -> Option<Split> {
     if refs.len() <= 64 {
         binned_split_with::<8>(refs, cbounds, weight)
@@ -64,7 +66,7 @@ pub fn binned_split(
 fn binned_split_with<const NB: usize>(
     refs: &[PrimRef],
     cbounds: &Aabb,
-    weight: impl Fn(&PrimRef) -> u32,
+    weight: impl Fn(&PrimRef) -> Weight,
 ) -> Option<Split> {
     let n = refs.len();
     let cext = cbounds.extent();
@@ -86,7 +88,7 @@ fn binned_split_with<const NB: usize>(
         let set = k & 1;
         let (lo, hi) = (r.lo(), r.hi());
         let b = bin3((lo + hi - cmin) * scale, last);
-        let w = weight(r);
+        let w = prims_of(weight(r)) as u32;
         for axis in 0..3 {
             count[set][axis][b[axis]] += w;
             let bb = &mut bins[set][axis][b[axis]];
@@ -96,7 +98,7 @@ fn binned_split_with<const NB: usize>(
         sampled += w as u64;
     }
     let total: u64 = if stride > 1 {
-        refs.iter().map(|r| weight(r) as u64).sum()
+        refs.iter().map(|r| prims_of(weight(r)) as u64).sum()
     } else {
         sampled
     };
@@ -165,8 +167,8 @@ pub fn partition(
     scale: Vec3A,
     axis: usize,
     limit: f32,
-    weight: impl Fn(&PrimRef) -> u32,
-) -> (usize, usize, (Aabb, Aabb), (Aabb, Aabb)) {
+    weight: impl Fn(&PrimRef) -> Weight,
+) -> (usize, Weight, (Aabb, Aabb), (Aabb, Aabb)) {
     let limit = Vec3A::splat(limit);
     let bit = 1 << axis;
     let n = refs.len();

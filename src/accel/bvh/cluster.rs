@@ -17,8 +17,8 @@
 //! 24.84 with an exact SAH sweep under each cluster instead of [`run_tree`].
 
 use super::{
-    bounds_of, build_node, finish, half_area, inner, Bvh, BvhNode, Kind, PrimRef, Prims, Sub,
-    MAX_DEPTH,
+    bounds_of, build_node, finish, half_area, inner, slots_of, Bvh, BvhNode, Kind, PrimRef,
+    Prims, Sub, Weight, MAX_DEPTH,
 };
 use crate::accel::wide::merges;
 use crate::accel::{huge_pages, BuildTimes};
@@ -48,27 +48,32 @@ pub(super) fn build<F>(n: usize, prim: &F, times: &mut BuildTimes) -> Bvh
 where
     F: Fn(u32) -> PrimRef + Sync,
 {
-    let keys = sorted_keys(n, prim);
+    let (keys, world) = sorted_keys(n, prim);
     times.mark("Morton sort");
+    let merge_weight = crate::accel::wide::merge_weight(n, &world);
     // Clusters: runs of consecutive primitives, formed in fixed chunks of the curve (so the
     // result depends on the input only, not on the threads).
     let parts: Vec<(Vec<u32>, Vec<PrimRef>)> = keys
         .par_chunks(CHUNK)
         .enumerate()
-        .map(|(c, chunk)| clusters_of(chunk, (c * CHUNK) as u32, prim))
+        .map(|(c, chunk)| clusters_of(chunk, (c * CHUNK) as u32, prim, merge_weight))
         .collect();
     let (start, mut clusters) = concatenate(parts, n);
     times.mark("clusters");
-    let mut nodes: Vec<MaybeUninit<BvhNode>> = huge_pages::with_capacity(2 * n);
+    // The nodes, exactly: each cluster's own tree, and one inner node fewer than clusters
+    // above them.
+    let total: Weight = clusters.iter().map(PrimRef::cluster_weight).sum();
+    let mut nodes: Vec<MaybeUninit<BvhNode>> = huge_pages::with_capacity(slots_of(total));
     // SAFETY: MaybeUninit needs no initialisation.
-    unsafe { nodes.set_len(2 * n) };
+    unsafe { nodes.set_len(slots_of(total)) };
     let mut order = huge_pages::zeroed(n);
     let (b, cb) = bounds_of(&clusters);
+    debug_assert_eq!((b.min, b.max), (world.min, world.max));
     let kind = Clusters {
         keys: &keys,
         start: &start,
         prim,
-        merge_weight: crate::accel::wide::merge_weight(n, &b),
+        merge_weight,
     };
     let _ = build_node(&kind, &mut nodes, &mut order, &mut clusters, 0, 0, b, cb);
     times.mark("binary SAH tree");
@@ -91,9 +96,13 @@ struct Clusters<'a, F> {
 impl<F: Fn(u32) -> PrimRef + Sync> Kind for Clusters<'_, F> {
     const MAX_LEAF: usize = 1;
     const UNIT: bool = false;
+    /// Median splits from this depth halve the clusters, fewer than 2²⁷, so single ones lie
+    /// at most 27 levels deeper, and a cluster's tree adds at most `CLUSTER_SIZE - 1`
+    /// levels: no path passes `MAX_DEPTH`.
+    const MEDIAN_DEPTH: usize = MAX_DEPTH - 32 - CLUSTER_SIZE;
     #[inline(always)]
-    fn weight(r: &PrimRef) -> u32 {
-        r.weight()
+    fn weight(r: &PrimRef) -> Weight {
+        r.cluster_weight()
     }
     fn leaf(
         &self,
@@ -101,7 +110,7 @@ impl<F: Fn(u32) -> PrimRef + Sync> Kind for Clusters<'_, F> {
         order: &mut [u32],
         refs: &[PrimRef],
         first: usize,
-        depth: usize,
+        _depth: usize,
         bounds: &Aabb,
     ) -> Sub {
         debug_assert_eq!(refs.len(), 1);
@@ -111,15 +120,16 @@ impl<F: Fn(u32) -> PrimRef + Sync> Kind for Clusters<'_, F> {
         for (p, &k) in prims.iter_mut().zip(keys) {
             *p = (self.prim)(k as u32);
         }
-        run_tree(
+        let (sub, used) = run_tree(
             nodes,
             order,
             &prims[..keys.len()],
             first,
-            depth,
             bounds,
             self.merge_weight,
-        )
+        );
+        debug_assert_eq!(used, nodes.len());
+        sub
     }
 }
 
@@ -130,18 +140,22 @@ impl<F: Fn(u32) -> PrimRef + Sync> Kind for Clusters<'_, F> {
 /// tree over each cluster's primitives by the exact sweep of [`super::sweep`] (whose leaves
 /// may hold several): wide SAH cost 24.57 against 24.84, and a fifth of the instructions;
 /// splitting each run in the middle instead gave 24.77.
+///
+/// The nodes are written one after the other from `nodes[0]`, each right child after its
+/// left sibling's subtree; returns what the parent records, and the number of nodes. The
+/// clusters are formed knowing that number ([`clusters_of`] builds each cluster's tree
+/// once to count them), so the tree above lays the clusters' trees out without gaps.
 fn run_tree(
     nodes: &mut [MaybeUninit<BvhNode>],
     order: &mut [u32],
     prims: &[PrimRef],
     first: usize,
-    depth: usize,
     bounds: &Aabb,
     merge_weight: f32,
-) -> Sub {
+) -> (Sub, usize) {
     let n = prims.len();
     if n == 1 {
-        return Prims.leaf(nodes, order, prims, first, depth, bounds);
+        return (Prims.leaf(nodes, order, prims, first, 0, bounds), 1);
     }
     // A run of up to three primitives that the wide collapse would merge into one leaf
     // (`wide::merges`; split down to single primitives it would have a leaf each) is that
@@ -157,11 +171,12 @@ fn run_tree(
             merge_weight,
         )
     {
-        let _ = Prims.leaf(nodes, order, prims, first, depth, bounds);
-        return Sub {
+        let _ = Prims.leaf(nodes, order, prims, first, 0, bounds);
+        let sub = Sub {
             leaves: n as u32,
             costly: false,
         };
+        return (sub, 1);
     }
     // Suffix bounds (kept for the right child), then the prefix sweep.
     let mut slo = [Vec3A::ZERO; CLUSTER_SIZE];
@@ -186,30 +201,18 @@ fn run_tree(
             best = (k, cost, lo, hi);
         }
     }
-    let (mut k, _, mut llo, mut lhi) = best;
-    if depth >= MAX_DEPTH - 32 {
-        // Deep in a degenerate tree (see `build_node`): the middle, so that no path grows
-        // past `MAX_DEPTH` (the clusters above halved from `MAX_DEPTH - 32` on, fewer than
-        // 2²⁷ of them, and at most three levels below).
-        k = n / 2;
-        (llo, lhi) = (prims[0].lo(), prims[0].hi());
-        for r in &prims[1..k] {
-            llo = llo.min(r.lo());
-            lhi = lhi.max(r.hi());
-        }
-    }
+    let (k, _, llo, lhi) = best;
     let (head, rest) = nodes.split_first_mut().unwrap();
-    head.write(inner(bounds, first, n));
-    let (ln, rn) = rest.split_at_mut(2 * k - 1);
     let (lo, ro) = order.split_at_mut(k);
     let lb = Aabb { min: llo, max: lhi };
     let rb = Aabb {
         min: slo[k],
         max: shi[k],
     };
-    let a = run_tree(ln, lo, &prims[..k], first, depth + 1, &lb, merge_weight);
-    let b = run_tree(rn, ro, &prims[k..], first + k, depth + 1, &rb, merge_weight);
-    finish(head, a.join(b))
+    let (a, l) = run_tree(rest, lo, &prims[..k], first, &lb, merge_weight);
+    let (b, r) = run_tree(&mut rest[l..], ro, &prims[k..], first + k, &rb, merge_weight);
+    head.write(inner(bounds, 1 + l, n));
+    (finish(head, a.join(b)), 1 + l + r)
 }
 
 /// The chunks' clusters one after the other: each cluster's first primitive (and, last, the
@@ -256,44 +259,73 @@ fn concatenate(parts: Vec<(Vec<u32>, Vec<PrimRef>)>, prims: usize) -> (Vec<u32>,
 /// caller). A cluster takes the next primitive while it has fewer than `CLUSTER_SIZE` and
 /// its bounds' surface area stays within `CLUSTER_AREA` times the sum of its primitives' (so
 /// it never spans a jump of the curve).
-fn clusters_of<F>(chunk: &[u64], base: u32, prim: &F) -> (Vec<u32>, Vec<PrimRef>)
+fn clusters_of<F>(
+    chunk: &[u64],
+    base: u32,
+    prim: &F,
+    merge_weight: f32,
+) -> (Vec<u32>, Vec<PrimRef>)
 where
     F: Fn(u32) -> PrimRef,
 {
     let mut starts = vec![base];
     let mut out = Vec::with_capacity(chunk.len() / 2 + 1);
-    let mut cb = prim(chunk[0] as u32).bounds();
+    // The cluster's primitives, whose tree is built once here to count its nodes.
+    let mut prims = [PrimRef::EMPTY; CLUSTER_SIZE];
+    let mut scratch = [MaybeUninit::<BvhNode>::uninit(); 2 * CLUSTER_SIZE - 1];
+    let mut scratch_order = [0u32; CLUSTER_SIZE];
+    let mut close = |prims: &[PrimRef], cb: &Aabb| {
+        let len = prims.len();
+        let (_, slots) = run_tree(
+            &mut scratch,
+            &mut scratch_order[..len],
+            prims,
+            0,
+            cb,
+            merge_weight,
+        );
+        PrimRef::cluster(cb, 0, len as u32, slots as u32)
+    };
+    prims[0] = prim(chunk[0] as u32);
+    let mut cb = prims[0].bounds();
     let (mut sum, mut len) = (cb.surface_area(), 1);
     for (i, &k) in chunk.iter().enumerate().skip(1) {
-        let b = prim(k as u32).bounds();
+        let r = prim(k as u32);
+        let b = r.bounds();
         let u = Aabb::union(&cb, &b);
         let a = b.surface_area();
         if len == CLUSTER_SIZE || u.surface_area() > CLUSTER_AREA * (sum + a) {
             starts.push(base + i as u32);
-            out.push(PrimRef::cluster(&cb, 0, len as u32));
+            out.push(close(&prims[..len], &cb));
             (cb, sum, len) = (b, a, 1);
         } else {
             (cb, sum, len) = (u, sum + a, len + 1);
         }
+        prims[len - 1] = r;
     }
-    out.push(PrimRef::cluster(&cb, 0, len as u32));
+    out.push(close(&prims[..len], &cb));
     (starts, out)
 }
 
 /// The primitives' keys (Morton code of the centroid in the high 32 bits, index in the low),
-/// sorted. Keys are distinct, so the order is unique.
-fn sorted_keys<F>(n: usize, prim: &F) -> Vec<u64>
+/// sorted, and the bounds of all primitives. Keys are distinct, so the order is unique.
+fn sorted_keys<F>(n: usize, prim: &F) -> (Vec<u64>, Aabb)
 where
     F: Fn(u32) -> PrimRef + Sync,
 {
-    let cb = (0..n as u32)
+    // (Minimum and maximum are exact, so any grouping of this reduction gives the same.)
+    let (world, cb) = (0..n as u32)
         .into_par_iter()
         .with_min_len(1 << 12)
         .map(|i| {
-            let c = prim(i).c2();
-            Aabb { min: c, max: c }
+            let r = prim(i);
+            let c = r.c2();
+            (r.bounds(), Aabb { min: c, max: c })
         })
-        .reduce(|| Aabb::EMPTY, |a, b| Aabb::union(&a, &b));
+        .reduce(
+            || (Aabb::EMPTY, Aabb::EMPTY),
+            |a, b| (Aabb::union(&a.0, &b.0), Aabb::union(&a.1, &b.1)),
+        );
     let ext = cb.extent();
     let steps = (1u32 << (CODE_BITS / 3)) as f32;
     let scale = Vec3A::select(
@@ -312,7 +344,7 @@ where
         })
         .collect_into_vec(&mut keys);
     radix_sort_high(&mut keys);
-    keys
+    (keys, world)
 }
 
 /// The low 10 bits of `x` moved to every third bit (bit i to bit 3i).
@@ -417,18 +449,22 @@ mod tests {
     }
 
     /// Every primitive in exactly one leaf, leaves of at most `MAX_LEAF`, every node's
-    /// bounds holding its primitives' and its children's, and no path deeper than
-    /// `MAX_DEPTH`.
+    /// bounds holding its primitives' and its children's, children splitting their parent's
+    /// range of the order, no path deeper than `MAX_DEPTH`, and every slot of the node array
+    /// holding exactly one node of the tree.
     fn check_tree(boxes: &[Aabb]) {
         let n = boxes.len();
         let prim = |i: u32| PrimRef::new(&boxes[i as usize], i, false);
         let bvh = build(n, &prim, &mut BuildTimes::start());
         let mut seen = vec![false; n];
+        let mut slot_used = vec![false; bvh.len()];
         let mut stack = vec![(0usize, 1usize)];
         while let Some((i, depth)) = stack.pop() {
             assert!(depth <= MAX_DEPTH, "a path {depth} nodes deep");
+            assert!(!slot_used[i], "slot {i} reached twice");
+            slot_used[i] = true;
             let node = bvh.node(i);
-            let (first, count) = bvh.prim_range(node);
+            let (first, count) = bvh.prim_range(i);
             let nb = node.bounds();
             for &p in &bvh.order[first as usize..(first + count) as usize] {
                 let b = &boxes[p as usize];
@@ -441,10 +477,17 @@ mod tests {
                     seen[p as usize] = true;
                 }
             } else {
-                stack.extend([(i + 1, depth + 1), (bvh.right(i), depth + 1)]);
+                let (r, (lf, lc), (rf, rc)) = (
+                    bvh.right(i),
+                    bvh.prim_range(i + 1),
+                    bvh.prim_range(bvh.right(i)),
+                );
+                assert_eq!((lf, rf, lc + rc), (first, first + lc, count));
+                stack.extend([(i + 1, depth + 1), (r, depth + 1)]);
             }
         }
         assert!(seen.iter().all(|&s| s), "a primitive in no leaf");
+        assert!(slot_used.iter().all(|&u| u), "a slot holding no node");
     }
 
     #[test]

@@ -3,7 +3,10 @@
 //! references are sorted along each axis once; children take their parent's sorted lists
 //! filtered (stable), so no level sorts again.
 
-use super::{finish, half_area, inner, split_pays, BvhNode, Kind, PrimRef, Sub};
+use super::{
+    finish, half_area, inner, prims_of, slots_of, split_pays, BvhNode, Kind, PrimRef, Sub,
+    Weight, PRIM,
+};
 use crate::geometry::Aabb;
 use glam::Vec3A;
 use std::mem::MaybeUninit;
@@ -16,7 +19,7 @@ pub const SWEEP_MAX: usize = 12;
 struct Small<'a> {
     lo: [Vec3A; SWEEP_MAX],
     hi: [Vec3A; SWEEP_MAX],
-    weight: [u32; SWEEP_MAX],
+    weight: [Weight; SWEEP_MAX],
     refs: &'a [PrimRef],
 }
 
@@ -37,7 +40,7 @@ pub fn sweep_node<K: Kind>(
     let mut s = Small {
         lo: [Vec3A::ZERO; SWEEP_MAX],
         hi: [Vec3A::ZERO; SWEEP_MAX],
-        weight: [1; SWEEP_MAX],
+        weight: [PRIM; SWEEP_MAX],
         refs,
     };
     for (i, r) in refs.iter().enumerate() {
@@ -118,7 +121,7 @@ fn small_node<K: Kind>(
     if n == 2 {
         // Every sweep finds the one split: one reference on each side.
         let (a, b) = (ord[0][0] as usize, ord[0][1] as usize);
-        let wa = if K::UNIT { 1 } else { s.weight[a] as usize };
+        let wa = if K::UNIT { 1 } else { prims_of(s.weight[a]) };
         let cost =
             wa as f32 * half_area(s.lo[a], s.hi[a]) + (w - wa) as f32 * half_area(s.lo[b], s.hi[b]);
         let area = half_area(at.lo, at.hi).max(f32::MIN_POSITIVE);
@@ -129,9 +132,10 @@ fn small_node<K: Kind>(
             min: at.lo,
             max: at.hi,
         };
+        let sa = slots_of(s.weight[a]);
         let (head, rest) = nodes.split_first_mut().unwrap();
-        head.write(inner(&bounds, at.first, w));
-        let (ln, rn) = rest.split_at_mut(2 * wa - 1);
+        head.write(inner(&bounds, 1 + sa, w));
+        let (ln, rn) = rest.split_at_mut(sa);
         let (lo, ro) = order.split_at_mut(wa);
         let one = |i: usize, first: usize| Place {
             first,
@@ -160,7 +164,9 @@ fn small_node<K: Kind>(
         return finish(head, a.join(b));
     }
     // The cheapest split along each axis, (left count, left weight, cost), the three axes'
-    // sweeps interleaved (each is a chain of dependent minimums and maximums).
+    // sweeps interleaved (each is a chain of dependent minimums and maximums). (For
+    // primitives the weight is summed as for clusters, as it lays out the nodes, but the
+    // SAH counts k.)
     let mut right_area = [[0f32; 3]; SWEEP_MAX];
     let at_k = |k: usize| [0, 1, 2].map(|a| ord[a][k] as usize);
     let last = at_k(n - 1);
@@ -178,7 +184,7 @@ fn small_node<K: Kind>(
     }
     let head = at_k(0);
     let (mut alo, mut ahi) = (head.map(|i| s.lo[i]), head.map(|i| s.hi[i]));
-    let mut wl = head.map(|i| s.weight[i] as usize);
+    let mut wl = head.map(|i| s.weight[i]);
     let mut best_on = [(n / 2, 0, f32::INFINITY); 3];
     for (k, ra) in right_area.iter().enumerate().take(n).skip(1) {
         let i = at_k(k - 1);
@@ -186,12 +192,12 @@ fn small_node<K: Kind>(
             if k > 1 {
                 alo[a] = alo[a].min(s.lo[i[a]]);
                 ahi[a] = ahi[a].max(s.hi[i[a]]);
-                wl[a] += s.weight[i[a]] as usize;
+                wl[a] += s.weight[i[a]];
             }
-            let wl = if K::UNIT { k } else { wl[a] };
-            let cost = wl as f32 * half_area(alo[a], ahi[a]) + (w - wl) as f32 * ra[a];
+            let pl = if K::UNIT { k } else { prims_of(wl[a]) };
+            let cost = pl as f32 * half_area(alo[a], ahi[a]) + (w - pl) as f32 * ra[a];
             if cost < best_on[a].2 {
-                best_on[a] = (k, wl, cost);
+                best_on[a] = (k, wl[a], cost);
             }
         }
     }
@@ -228,15 +234,12 @@ fn split_middle<K: Kind>(
     axis: usize,
 ) -> Sub {
     let mid = n / 2;
-    let wl = ord[axis][..mid]
-        .iter()
-        .map(|&i| s.weight[i as usize] as usize)
-        .sum();
+    let wl = ord[axis][..mid].iter().map(|&i| s.weight[i as usize]).sum();
     children(kind, nodes, order, s, ord, n, at, axis, mid, wl)
 }
 
 /// Writes the inner node split after the first `mid` references of its list along `axis`
-/// (standing for `wl` primitives), and builds both children.
+/// (of weight `wl`), and builds both children.
 #[allow(clippy::too_many_arguments)]
 fn children<K: Kind>(
     kind: &K,
@@ -248,7 +251,7 @@ fn children<K: Kind>(
     at: Place,
     axis: usize,
     mid: usize,
-    wl: usize,
+    wl: Weight,
 ) -> Sub {
     // Children's sorted lists: each axis's list filtered by side, order kept. Branch-free
     // (each index is written to both lists, and one of the two ends advances): the side is
@@ -285,9 +288,10 @@ fn children<K: Kind>(
         min: at.lo,
         max: at.hi,
     };
+    let (sl, wl) = (slots_of(wl), prims_of(wl));
     let (head, rest) = nodes.split_first_mut().unwrap();
-    head.write(inner(&bounds, at.first, order.len()));
-    let (ln, rn) = rest.split_at_mut(2 * wl - 1);
+    head.write(inner(&bounds, 1 + sl, order.len()));
+    let (ln, rn) = rest.split_at_mut(sl);
     let (lo, ro) = order.split_at_mut(wl);
     let depth = at.depth + 1;
     let left_at = Place {
