@@ -328,40 +328,39 @@ impl Collapse<'_> {
 
     /// The wide nodes of the whole tree (root inner), its root first. The top, down to
     /// subtrees over at most `parallel_min` primitives, is collapsed here; those subtrees
-    /// are collapsed in parallel, each into its own array, and the arrays copied once, in
-    /// parallel too, into the tree's after the top's nodes, in a fixed order (the layout
-    /// depends on the tree alone, not on the threads).
+    /// are collapsed in parallel, in a fixed order after the top's nodes (the layout
+    /// depends on the tree alone, not on the threads). Each subtree's wide nodes are
+    /// counted first, so that it is collapsed straight into its own stretch of the tree's
+    /// array: counting costs a walk of the binary tree, where an array per subtree, copied
+    /// into the tree's, cost as much memory again as the tree's nodes, and fresh memory is
+    /// what the build spends most on (see docs/performance.md, "Fresh memory on this VM").
     fn top(&self) -> Vec<Node4> {
         let mut top = Vec::new();
         // (wide node, slot, binary node) of each subtree left to the parallel collapse
         let mut tasks = Vec::new();
         self.collapse_top(0, &mut top, &mut tasks);
         use rayon::prelude::*;
-        let subs: Vec<Vec<Node4>> = tasks.par_iter().map(|&(_, _, k)| self.subtree(k)).collect();
-        let total = top.len() + subs.iter().map(Vec::len).sum::<usize>();
+        let counts: Vec<usize> = tasks.par_iter().map(|&(_, _, k)| self.count(k)).collect();
+        let total = top.len() + counts.iter().sum::<usize>();
         let mut out: Vec<Node4> = super::huge_pages::with_capacity(total);
-        let mut jobs = Vec::with_capacity(subs.len());
+        let mut jobs = Vec::with_capacity(tasks.len());
         let mut base = top.len();
         let mut rest = &mut out.spare_capacity_mut()[top.len()..total];
-        for (&(w, slot, _), sub) in tasks.iter().zip(subs) {
+        for (&(w, slot, k), &count) in tasks.iter().zip(&counts) {
             top[w].child[slot] = base as ChildRef;
-            let (here, next) = std::mem::take(&mut rest).split_at_mut(sub.len());
+            let (here, next) = std::mem::take(&mut rest).split_at_mut(count);
             rest = next;
-            let len = sub.len();
-            jobs.push((sub, here, base as u32));
-            base += len;
+            jobs.push((k, here, base as ChildRef));
+            base += count;
         }
-        jobs.into_par_iter().for_each(|(sub, here, base)| {
-            for (o, mut n) in here.iter_mut().zip(sub) {
-                for c in &mut n.child {
-                    if *c & LEAF == 0 {
-                        *c += base;
-                    }
-                }
-                o.write(n);
-            }
+        jobs.into_par_iter().for_each(|(k, buf, base)| {
+            let mut stretch = Stretch { buf, len: 0, base };
+            self.collapse(k, &mut stretch);
+            // (`set_len` below relies on this.)
+            assert_eq!(stretch.len, stretch.buf.len(), "count and collapse disagree");
         });
-        // SAFETY: the jobs wrote every slot from top.len() to total, and top fills the rest.
+        // SAFETY: the jobs wrote every slot from top.len() to total (asserted above), and
+        // top fills the rest.
         unsafe {
             std::ptr::copy_nonoverlapping(top.as_ptr(), out.as_mut_ptr(), top.len());
             out.set_len(total);
@@ -390,33 +389,59 @@ impl Collapse<'_> {
         }
     }
 
-    /// The wide nodes of the subtree under binary inner node `i`, its root first; child
-    /// references count from the start of the returned array.
-    fn subtree(&self, i: usize) -> Vec<Node4> {
-        let mut out = super::huge_pages::with_capacity(self.b.node(i).prims() as usize / 2 + 1);
-        self.collapse(i, &mut out);
-        out
+    /// The number of wide nodes of the subtree under binary inner node `i`.
+    fn count(&self, i: usize) -> usize {
+        let kids = self.kids(i);
+        1 + kids
+            .iter()
+            .filter(|&&(_, area)| area >= 0.0)
+            .map(|&(k, _)| self.count(k))
+            .sum::<usize>()
     }
 
     /// Appends the wide node for binary inner node `i` and its subtree to `out`; returns
     /// its index.
-    fn collapse(&self, i: usize, out: &mut Vec<Node4>) -> ChildRef {
+    fn collapse(&self, i: usize, out: &mut Stretch) -> ChildRef {
         let (node, kids) = self.node(i);
-        let index = out.len();
-        out.push(node);
+        let index = out.push(node);
         for (slot, &(k, area)) in kids.iter().enumerate() {
             if area >= 0.0 {
                 let r = self.collapse(k, out);
-                out[index].child[slot] = r;
+                out.node_mut(index).child[slot] = r;
             }
         }
-        index as ChildRef
+        index
     }
 
     /// The wide node for binary inner node `i`, its inner children's references left
-    /// `EMPTY`, and its children: (binary node, its surface area, or −1 for a leaf).
+    /// `EMPTY`, and its children (see [`Self::kids`]).
     #[inline]
     fn node(&self, i: usize) -> (Node4, ArrayVec4) {
+        let b = self.b;
+        let ArrayVec4 { kids, len } = self.kids(i);
+        let (lo, hi) = (Vec4::splat(f32::INFINITY), Vec4::splat(f32::NEG_INFINITY));
+        let mut node = Node4 {
+            bounds: [lo, hi, lo, hi, lo, hi],
+            child: [EMPTY; 4],
+        };
+        for (slot, &(k, area)) in kids[..len].iter().enumerate() {
+            let kn = b.node(k);
+            for axis in 0..3 {
+                node.bounds[2 * axis][slot] = kn.min[axis];
+                node.bounds[2 * axis + 1][slot] = kn.max[axis];
+            }
+            if area < 0.0 {
+                let (first, count) = b.prim_range(k);
+                node.child[slot] = leaf_ref(first, count);
+            }
+        }
+        (node, ArrayVec4 { kids, len })
+    }
+
+    /// The children of the wide node for binary inner node `i`: (binary node, its surface
+    /// area, or −1 for a leaf).
+    #[inline]
+    fn kids(&self, i: usize) -> ArrayVec4 {
         let b = self.b;
         let kid = |k: usize| {
             let n = b.node(k);
@@ -452,23 +477,32 @@ impl Collapse<'_> {
             kids[len] = kid(b.right(k));
             len += 1;
         }
-        let (lo, hi) = (Vec4::splat(f32::INFINITY), Vec4::splat(f32::NEG_INFINITY));
-        let mut node = Node4 {
-            bounds: [lo, hi, lo, hi, lo, hi],
-            child: [EMPTY; 4],
-        };
-        for (slot, &(k, area)) in kids[..len].iter().enumerate() {
-            let kn = b.node(k);
-            for axis in 0..3 {
-                node.bounds[2 * axis][slot] = kn.min[axis];
-                node.bounds[2 * axis + 1][slot] = kn.max[axis];
-            }
-            if area < 0.0 {
-                let (first, count) = b.prim_range(k);
-                node.child[slot] = leaf_ref(first, count);
-            }
-        }
-        (node, ArrayVec4 { kids, len })
+        ArrayVec4 { kids, len }
+    }
+}
+
+/// A subtree's stretch of the wide tree's array, filled from its start; `base` is the
+/// index of its first slot in the whole array.
+struct Stretch<'a> {
+    buf: &'a mut [std::mem::MaybeUninit<Node4>],
+    len: usize,
+    base: ChildRef,
+}
+
+impl Stretch<'_> {
+    /// Writes `node` in the next slot (panics past the end); returns its index in the whole
+    /// array.
+    fn push(&mut self, node: Node4) -> ChildRef {
+        self.buf[self.len].write(node);
+        self.len += 1;
+        self.base + (self.len - 1) as ChildRef
+    }
+    /// The node at index `i` of the whole array, which `push` returned.
+    fn node_mut(&mut self, i: ChildRef) -> &mut Node4 {
+        let k = (i - self.base) as usize;
+        assert!(k < self.len);
+        // SAFETY: slots below `len` were written by `push`.
+        unsafe { self.buf[k].assume_init_mut() }
     }
 }
 
