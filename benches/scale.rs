@@ -47,24 +47,29 @@ fn main() {
         let desc = common::bunny_scene(mesh);
         // (The copy is the benchmark's, so that `desc` can be dropped after the build; it is
         // not part of the build.) With `--builds K`, the fastest of K builds counts.
-        let mut fastest: Option<(f64, Scene, Option<(u64, u64)>)> = None;
+        let mut fastest: Option<(f64, Scene, Option<(u64, u64)>, (f64, f64))> = None;
         for _ in 0..builds.max(1) {
             let copy = desc.clone();
             let start = reset_peak_rss();
+            let cpu = cpu_times();
             let t = Instant::now();
             let scene = Scene::build(copy);
             let build = t.elapsed().as_secs_f64();
+            let cpu_after = cpu_times();
+            let cpu = (cpu_after.0 - cpu.0, cpu_after.1 - cpu.1);
             let peak = start.zip(peak_rss());
-            if fastest.as_ref().is_none_or(|(b, _, _)| build < *b) {
-                fastest = Some((build, scene, peak));
+            if fastest.as_ref().is_none_or(|(b, ..)| build < *b) {
+                fastest = Some((build, scene, peak, cpu));
             }
         }
-        let (build, scene, peak) = fastest.unwrap();
+        let (build, scene, peak, cpu) = fastest.unwrap();
         let bytes = scene.memory_bytes() as f64 / scene.prim_count() as f64;
         phase_lines.push(format!(
-            "{} triangles: {}{}",
+            "{} triangles: {}; CPU time {:.3} s user, {:.3} s system{}",
             scene.prim_count(),
             scene.build_times.summary(),
+            cpu.0,
+            cpu.1,
             peak.map_or(String::new(), |(s, p)| format!(
                 "; resident memory {} MB before, at most {} MB during the build",
                 s >> 20,
@@ -134,4 +139,16 @@ fn status_bytes(field: &str) -> Option<u64> {
     let line = s.lines().find(|l| l.starts_with(field))?;
     let kb: u64 = line[field.len()..].trim().trim_end_matches("kB").trim().parse().ok()?;
     Some(kb << 10)
+}
+
+/// The process's user and system CPU time so far, in seconds (both threads' together).
+fn cpu_times() -> (f64, f64) {
+    // SAFETY: getrusage writes the struct it is given, which is plain data.
+    let u = unsafe {
+        let mut u: libc::rusage = std::mem::zeroed();
+        libc::getrusage(libc::RUSAGE_SELF, &mut u);
+        u
+    };
+    let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    (secs(u.ru_utime), secs(u.ru_stime))
 }

@@ -17,7 +17,7 @@
 //! 24.84 with an exact SAH sweep under each cluster instead of [`run_tree`].
 
 use super::{
-    bounds_of, build_node, finish, half_area, inner, slots_of, Bvh, BvhNode, Kind, PrimRef,
+    bounds_of, build_node, finish, half_area, inner, prims_of, slots_of, Bvh, BvhNode, Kind, PrimRef,
     Prims, Sub, Weight, MAX_DEPTH,
 };
 use crate::accel::wide::merges;
@@ -53,12 +53,12 @@ where
     let merge_weight = crate::accel::wide::merge_weight(n, &world);
     // Clusters: runs of consecutive primitives, formed in fixed chunks of the curve (so the
     // result depends on the input only, not on the threads).
-    let parts: Vec<(Vec<u32>, Vec<PrimRef>)> = keys
+    let parts: Vec<Vec<PrimRef>> = keys
         .par_chunks(CHUNK)
         .enumerate()
         .map(|(c, chunk)| clusters_of(chunk, (c * CHUNK) as u32, prim, merge_weight))
         .collect();
-    let (start, mut clusters) = concatenate(parts, n);
+    let mut clusters = concatenate(parts);
     times.mark("clusters");
     // The nodes, exactly: each cluster's own tree, and one inner node fewer than clusters
     // above them.
@@ -71,7 +71,6 @@ where
     debug_assert_eq!((b.min, b.max), (world.min, world.max));
     let kind = Clusters {
         keys: &keys,
-        start: &start,
         prim,
         merge_weight,
     };
@@ -83,10 +82,9 @@ where
 /// Clusters of primitives: a leaf of the tree over them is one cluster, under which the
 /// tree over its primitives is built.
 struct Clusters<'a, F> {
-    /// The sorted keys, whose low halves are the primitives in Morton order: cluster `c` is
-    /// the primitives of `keys[start[c]..start[c + 1]]`.
+    /// The sorted keys, whose low halves are the primitives in Morton order: a cluster's
+    /// reference holds the position of its first in its index lane.
     keys: &'a [u64],
-    start: &'a [u32],
     prim: &'a F,
     /// The wide collapse's merge weight: subtrees it would merge into one leaf are built
     /// as that leaf (see [`run_tree`]).
@@ -114,8 +112,8 @@ impl<F: Fn(u32) -> PrimRef + Sync> Kind for Clusters<'_, F> {
         bounds: &Aabb,
     ) -> Sub {
         debug_assert_eq!(refs.len(), 1);
-        let c = refs[0].index() as usize;
-        let keys = &self.keys[self.start[c] as usize..self.start[c + 1] as usize];
+        let start = refs[0].index() as usize;
+        let keys = &self.keys[start..start + prims_of(refs[0].cluster_weight())];
         let mut prims = [PrimRef::EMPTY; CLUSTER_SIZE];
         for (p, &k) in prims.iter_mut().zip(keys) {
             *p = (self.prim)(k as u32);
@@ -215,48 +213,31 @@ fn run_tree(
     (finish(head, a.join(b)), 1 + l + r)
 }
 
-/// The chunks' clusters one after the other: each cluster's first primitive (and, last, the
-/// number of primitives), and the clusters with their indices set.
-fn concatenate(parts: Vec<(Vec<u32>, Vec<PrimRef>)>, prims: usize) -> (Vec<u32>, Vec<PrimRef>) {
-    let count: usize = parts.iter().map(|(_, c)| c.len()).sum();
-    let mut start: Vec<u32> = huge_pages::with_capacity(count + 1);
+/// The chunks' clusters one after the other (copied in parallel, each part to its own
+/// stretch).
+fn concatenate(parts: Vec<Vec<PrimRef>>) -> Vec<PrimRef> {
+    let count: usize = parts.iter().map(Vec::len).sum();
     let mut clusters: Vec<PrimRef> = huge_pages::with_capacity(count);
-    {
-        // Each part's own stretch of both arrays, split off in order.
-        let mut jobs = Vec::with_capacity(parts.len());
-        let mut s_rest = &mut start.spare_capacity_mut()[..count];
-        let mut c_rest = &mut clusters.spare_capacity_mut()[..count];
-        let mut base = 0;
-        for (s, c) in parts {
-            let (s_here, s_next) = std::mem::take(&mut s_rest).split_at_mut(s.len());
-            let (c_here, c_next) = std::mem::take(&mut c_rest).split_at_mut(c.len());
-            (s_rest, c_rest) = (s_next, c_next);
-            let len = c.len();
-            jobs.push((s, c, s_here, c_here, base));
-            base += len;
+    let mut jobs = Vec::with_capacity(parts.len());
+    let mut rest = &mut clusters.spare_capacity_mut()[..count];
+    for c in parts {
+        let (here, next) = std::mem::take(&mut rest).split_at_mut(c.len());
+        rest = next;
+        jobs.push((c, here));
+    }
+    jobs.into_par_iter().for_each(|(c, out)| {
+        for (o, r) in out.iter_mut().zip(c) {
+            o.write(r);
         }
-        jobs.into_par_iter().for_each(|(s, c, s_out, c_out, base)| {
-            for (o, &x) in s_out.iter_mut().zip(&s) {
-                o.write(x);
-            }
-            for (k, (o, mut r)) in c_out.iter_mut().zip(c).enumerate() {
-                r.lo.w = f32::from_bits((base + k) as u32);
-                o.write(r);
-            }
-        });
-    }
+    });
     // SAFETY: the parts' stretches cover 0..count, and each was written whole.
-    unsafe {
-        start.set_len(count);
-        clusters.set_len(count);
-    }
-    start.push(prims as u32);
-    (start, clusters)
+    unsafe { clusters.set_len(count) };
+    clusters
 }
 
-/// The clusters of one chunk of the sorted keys, whose first is the `base`-th: each
-/// cluster's first position, and a reference to it with its weight (its index is set by the
-/// caller). A cluster takes the next primitive while it has fewer than `CLUSTER_SIZE` and
+/// The clusters of one chunk of the sorted keys, whose first is the `base`-th: a reference
+/// to each, with its primitives and nodes, and the position of its first primitive in the
+/// keys in place of an index. A cluster takes the next primitive while it has fewer than `CLUSTER_SIZE` and
 /// its bounds' surface area stays within `CLUSTER_AREA` times the sum of its primitives' (so
 /// it never spans a jump of the curve).
 fn clusters_of<F>(
@@ -264,17 +245,17 @@ fn clusters_of<F>(
     base: u32,
     prim: &F,
     merge_weight: f32,
-) -> (Vec<u32>, Vec<PrimRef>)
+) -> Vec<PrimRef>
 where
     F: Fn(u32) -> PrimRef,
 {
-    let mut starts = vec![base];
+    let mut first = base;
     let mut out = Vec::with_capacity(chunk.len() / 2 + 1);
     // The cluster's primitives, whose tree is built once here to count its nodes.
     let mut prims = [PrimRef::EMPTY; CLUSTER_SIZE];
     let mut scratch = [MaybeUninit::<BvhNode>::uninit(); 2 * CLUSTER_SIZE - 1];
     let mut scratch_order = [0u32; CLUSTER_SIZE];
-    let mut close = |prims: &[PrimRef], cb: &Aabb| {
+    let mut close = |prims: &[PrimRef], cb: &Aabb, first: u32| {
         let len = prims.len();
         let (_, slots) = run_tree(
             &mut scratch,
@@ -284,7 +265,7 @@ where
             cb,
             merge_weight,
         );
-        PrimRef::cluster(cb, 0, len as u32, slots as u32)
+        PrimRef::cluster(cb, first, len as u32, slots as u32)
     };
     prims[0] = prim(chunk[0] as u32);
     let mut cb = prims[0].bounds();
@@ -295,16 +276,16 @@ where
         let u = Aabb::union(&cb, &b);
         let a = b.surface_area();
         if len == CLUSTER_SIZE || u.surface_area() > CLUSTER_AREA * (sum + a) {
-            starts.push(base + i as u32);
-            out.push(close(&prims[..len], &cb));
+            out.push(close(&prims[..len], &cb, first));
+            first = base + i as u32;
             (cb, sum, len) = (b, a, 1);
         } else {
             (cb, sum, len) = (u, sum + a, len + 1);
         }
         prims[len - 1] = r;
     }
-    out.push(close(&prims[..len], &cb));
-    (starts, out)
+    out.push(close(&prims[..len], &cb, first));
+    out
 }
 
 /// The primitives' keys (Morton code of the centroid in the high 32 bits, index in the low),
