@@ -16,6 +16,10 @@ use mcrt::scene::desc::FileSettings;
 use mcrt::scene::Scene;
 use std::time::Instant;
 
+/// A build: its wall time, the scene, the resident memory before and at most during it
+/// (bytes, where the OS tells), and its user and system CPU time (seconds).
+type Build = (f64, Scene, Option<(u64, u64)>, (f64, f64));
+
 fn main() {
     let max: u64 = std::env::args()
         .skip(1)
@@ -47,7 +51,7 @@ fn main() {
         let desc = common::bunny_scene(mesh);
         // (The copy is the benchmark's, so that `desc` can be dropped after the build; it is
         // not part of the build.) With `--builds K`, the fastest of K builds counts.
-        let mut fastest: Option<(f64, Scene, Option<(u64, u64)>, (f64, f64))> = None;
+        let mut fastest: Option<Build> = None;
         for _ in 0..builds.max(1) {
             let copy = desc.clone();
             let start = reset_peak_rss();
@@ -137,7 +141,12 @@ fn peak_rss() -> Option<u64> {
 fn status_bytes(field: &str) -> Option<u64> {
     let s = std::fs::read_to_string("/proc/self/status").ok()?;
     let line = s.lines().find(|l| l.starts_with(field))?;
-    let kb: u64 = line[field.len()..].trim().trim_end_matches("kB").trim().parse().ok()?;
+    let kb: u64 = line[field.len()..]
+        .trim()
+        .trim_end_matches("kB")
+        .trim()
+        .parse()
+        .ok()?;
     Some(kb << 10)
 }
 

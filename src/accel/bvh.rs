@@ -4,15 +4,18 @@
 //! Build: Wald, "On fast Construction of SAH-based Bounding Volume Hierarchies", RT 2007
 //! (binning centroids into 16 buckets per axis and sweeping for the cheapest split,
 //! [`binned`]), with Embree's 32-byte primitive references (bounds with the index in the
-//! spare lane), branch-free in-place partitioning, and a node array laid out in advance (a
-//! subtree over n primitives takes at most 2n − 1 slots: the left child follows its parent
-//! and the right child starts 2·n_left slots after it), so subtrees built in parallel write
-//! straight into their own parts of it, and each leaf writes its primitives' indices into
-//! its own part of the final order. Large nodes choose their split from a fixed sample of
-//! their primitives; small ones find the exact SAH split over lists sorted once per axis
+//! spare lane), branch-free in-place partitioning, and a node array laid out in advance:
+//! each reference carries the number of slots its subtree takes ([`Weight`]: a primitive's
+//! leaf one, a cluster's own tree exactly as many nodes as it has), so a subtree over
+//! references takes one slot fewer than the sum of theirs, the left child follows its
+//! parent and the parent records where the right child starts. Subtrees built in parallel
+//! write straight into their own parts of it, and each leaf writes its primitives' indices
+//! into its own part of the final order. Large nodes choose their split from a fixed sample
+//! of their primitives; small ones find the exact SAH split over lists sorted once per axis
 //! ([`sweep`]). Inputs of [`CLUSTER_MIN`] primitives or more are built over clusters of
-//! neighbours, each cluster's own tree below it ([`cluster`]). The result depends only on
-//! the input, never on the thread count.
+//! neighbours, each cluster's own tree below it ([`cluster`]), with no gaps in the node
+//! array and no array of the primitives' references (see [`build`]). The result depends
+//! only on the input, never on the thread count.
 
 use super::BuildTimes;
 use crate::geometry::Aabb;

@@ -357,7 +357,11 @@ impl Collapse<'_> {
             let mut stretch = Stretch { buf, len: 0, base };
             self.collapse(k, &mut stretch);
             // (`set_len` below relies on this.)
-            assert_eq!(stretch.len, stretch.buf.len(), "count and collapse disagree");
+            assert_eq!(
+                stretch.len,
+                stretch.buf.len(),
+                "count and collapse disagree"
+            );
         });
         // SAFETY: the jobs wrote every slot from top.len() to total (asserted above), and
         // top fills the rest.

@@ -15,10 +15,19 @@
 //! scale`, 940 k triangles, see docs/performance.md): the wide tree's SAH cost is 24.57,
 //! against 24.9 for the binary SAH tree over clusters of at most two that were leaves, and
 //! 24.84 with an exact SAH sweep under each cluster instead of [`run_tree`].
+//!
+//! Memory: at 10 M triangles the build's arrays are a large share of its time on hosts that
+//! charge for memory a process touches first (docs/performance.md, "Fresh memory on this
+//! VM"), so it keeps few: the sorted keys (8 bytes a primitive, whose low halves name the
+//! primitives in curve order), the clusters' references, the nodes and the order. A
+//! primitive's bounds are asked of the caller again where they are needed (for its key,
+//! when the clusters form, and when its cluster's tree is built) instead of being stored and
+//! gathered along the curve (64 bytes a primitive); each cluster's tree is built once when
+//! the cluster forms, to count its nodes, so that the node array holds no gaps.
 
 use super::{
-    bounds_of, build_node, finish, half_area, inner, prims_of, slots_of, Bvh, BvhNode, Kind, PrimRef,
-    Prims, Sub, Weight, MAX_DEPTH,
+    bounds_of, build_node, finish, half_area, inner, prims_of, slots_of, Bvh, BvhNode, Kind,
+    PrimRef, Prims, Sub, Weight, MAX_DEPTH,
 };
 use crate::accel::wide::merges;
 use crate::accel::{huge_pages, BuildTimes};
@@ -208,7 +217,14 @@ fn run_tree(
         max: shi[k],
     };
     let (a, l) = run_tree(rest, lo, &prims[..k], first, &lb, merge_weight);
-    let (b, r) = run_tree(&mut rest[l..], ro, &prims[k..], first + k, &rb, merge_weight);
+    let (b, r) = run_tree(
+        &mut rest[l..],
+        ro,
+        &prims[k..],
+        first + k,
+        &rb,
+        merge_weight,
+    );
     head.write(inner(bounds, 1 + l, n));
     (finish(head, a.join(b)), 1 + l + r)
 }
@@ -240,12 +256,7 @@ fn concatenate(parts: Vec<Vec<PrimRef>>) -> Vec<PrimRef> {
 /// keys in place of an index. A cluster takes the next primitive while it has fewer than `CLUSTER_SIZE` and
 /// its bounds' surface area stays within `CLUSTER_AREA` times the sum of its primitives' (so
 /// it never spans a jump of the curve).
-fn clusters_of<F>(
-    chunk: &[u64],
-    base: u32,
-    prim: &F,
-    merge_weight: f32,
-) -> Vec<PrimRef>
+fn clusters_of<F>(chunk: &[u64], base: u32, prim: &F, merge_weight: f32) -> Vec<PrimRef>
 where
     F: Fn(u32) -> PrimRef,
 {

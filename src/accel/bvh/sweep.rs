@@ -4,8 +4,8 @@
 //! filtered (stable), so no level sorts again.
 
 use super::{
-    finish, half_area, inner, prims_of, slots_of, split_pays, BvhNode, Kind, PrimRef, Sub,
-    Weight, PRIM,
+    finish, half_area, inner, prims_of, slots_of, split_pays, BvhNode, Kind, PrimRef, Sub, Weight,
+    PRIM,
 };
 use crate::geometry::Aabb;
 use glam::Vec3A;
