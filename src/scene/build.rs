@@ -175,9 +175,9 @@ impl Scene {
         positions.push(glam::Vec3::ZERO);
         let wide = WideBvh::from_binary(&bvh);
         times.mark("4-wide collapse");
-        // The binary tree's nodes go before the triangles are reordered, and each array
-        // before its reordered copy is used, so that the copies reuse memory the build has
-        // touched already (see `bvh::build` on fresh memory).
+        // The binary tree's nodes are freed before the triangles are reordered, and each
+        // old array as soon as its reordered copy is made, so that the copies reuse memory
+        // the build has touched already (see `bvh::build` on fresh memory).
         let order = bvh.into_order();
         let tris = permuted(tris, &order);
         let meta = permuted(meta, &order);
