@@ -46,8 +46,8 @@ pub struct Split {
 /// along all three axes in one pass (over a fixed sample of a large node; fewer bins for
 /// fewer references), each bin's bounds and weight swept from both ends. `weight` is what a
 /// reference stands for; its primitives (1 for a primitive, its primitive count for a
-/// cluster) count in the SAH. `cbounds` bounds the doubled centroids. `None` where no bin boundary has references on
-/// both sides (every centroid in one bin along every axis).
+/// cluster) count in the SAH. `cbounds` bounds the doubled centroids. `None` where no bin
+/// boundary has references on both sides (every centroid in one bin along every axis).
 #[inline]
 pub fn binned_split(
     refs: &[PrimRef],

@@ -26,8 +26,8 @@
 //! the cluster forms, to count its nodes, so that the node array holds no gaps.
 
 use super::{
-    bounds_of, build_node, finish, half_area, inner, prims_of, slots_of, Bvh, BvhNode, Kind,
-    PrimRef, Prims, Sub, Weight, MAX_DEPTH,
+    bounds_of, build_node, finish, half_area, inner, slots_of, Bvh, BvhNode, Kind, PrimRef, Prims,
+    Sub, Weight, MAX_DEPTH,
 };
 use crate::accel::wide::merges;
 use crate::accel::{huge_pages, BuildTimes};
@@ -122,7 +122,8 @@ impl<F: Fn(u32) -> PrimRef + Sync> Kind for Clusters<'_, F> {
     ) -> Sub {
         debug_assert_eq!(refs.len(), 1);
         let start = refs[0].index() as usize;
-        let keys = &self.keys[start..start + prims_of(refs[0].cluster_weight())];
+        // (The cluster's primitives are as many as its part of the order.)
+        let keys = &self.keys[start..start + order.len()];
         let mut prims = [PrimRef::EMPTY; CLUSTER_SIZE];
         for (p, &k) in prims.iter_mut().zip(keys) {
             *p = (self.prim)(k as u32);
@@ -253,9 +254,9 @@ fn concatenate(parts: Vec<Vec<PrimRef>>) -> Vec<PrimRef> {
 
 /// The clusters of one chunk of the sorted keys, whose first is the `base`-th: a reference
 /// to each, with its primitives and nodes, and the position of its first primitive in the
-/// keys in place of an index. A cluster takes the next primitive while it has fewer than `CLUSTER_SIZE` and
-/// its bounds' surface area stays within `CLUSTER_AREA` times the sum of its primitives' (so
-/// it never spans a jump of the curve).
+/// keys in place of an index. A cluster takes the next primitive while it has fewer than
+/// `CLUSTER_SIZE` and its bounds' surface area stays within `CLUSTER_AREA` times the sum of
+/// its primitives' (so it never spans a jump of the curve).
 fn clusters_of<F>(chunk: &[u64], base: u32, prim: &F, merge_weight: f32) -> Vec<PrimRef>
 where
     F: Fn(u32) -> PrimRef,
