@@ -17,13 +17,14 @@
 //! array and no array of the primitives' references (see [`build`]). The result depends
 //! only on the input, never on the thread count.
 
-use super::BuildTimes;
+use super::{BuildTimes, WideBvh};
 use crate::geometry::Aabb;
 use glam::{BVec4A, Vec3A, Vec4};
 use std::mem::MaybeUninit;
 
 mod binned;
 mod cluster;
+mod fused;
 mod sweep;
 use binned::{binned_split, partition};
 pub use cluster::CLUSTER_MIN;
@@ -147,6 +148,13 @@ impl BvhNode {
     pub fn costly(&self) -> bool {
         self.first & COSTLY != 0
     }
+    /// Whether it is a stub: a node that stands for a subtree built elsewhere (see
+    /// [`fused`]), with its bounds and primitives, the first of them in `first`, and no
+    /// leaves recorded (every other inner node has at least two).
+    #[inline]
+    pub fn is_stub(&self) -> bool {
+        !self.is_leaf() && self.leaves() == 0
+    }
     #[inline]
     pub fn bounds(&self) -> Aabb {
         Aabb {
@@ -185,10 +193,10 @@ fn finish(node: &mut MaybeUninit<BvhNode>, sub: Sub) -> Sub {
     sub
 }
 
-/// The binary tree: node 0 is the root; an inner node `i`'s children are `i + 1` and the
-/// node its `first` names. Each subtree takes a run of slots of its own. Slots no node
-/// landed in (under a leaf of several primitives) stay uninitialised and are never read;
-/// the tree over clusters has none.
+/// The binary tree over fewer than [`CLUSTER_MIN`] primitives: node 0 is the root; an inner
+/// node `i`'s children are `i + 1` and the node its `first` names. Each subtree takes a run
+/// of slots of its own. Slots no node landed in (under a leaf of several primitives) stay
+/// uninitialised and are never read.
 pub struct Bvh {
     nodes: Vec<MaybeUninit<BvhNode>>,
     /// `order[i]` is the caller's index of the BVH's i-th primitive.
@@ -196,50 +204,62 @@ pub struct Bvh {
 }
 
 impl Bvh {
-    /// Node `i`; `i` must be the root or a child of a node read through here.
-    #[inline]
-    pub fn node(&self, i: usize) -> &BvhNode {
-        // SAFETY: the build writes the root and both children of every inner node it writes,
-        // at exactly the indices this layout names; only those are read.
-        unsafe { self.nodes[i].assume_init_ref() }
+    /// The nodes, for the collapse and the tests.
+    pub(crate) fn nodes(&self) -> Nodes<'_> {
+        // SAFETY: the build writes the root and both children of every inner node it
+        // writes, at exactly the indices this layout names (and makes no stubs).
+        unsafe { Nodes::new(&self.nodes) }
     }
-    /// Asks the cache for node `i` (a hint, for any `i`).
-    #[inline(always)]
-    pub fn prefetch(&self, i: usize) {
-        if let Some(n) = self.nodes.get(i) {
-            super::prefetch(n);
-        }
-    }
-    /// The right child of inner node `i`.
-    #[inline]
-    pub fn right(&self, i: usize) -> usize {
-        i + (self.node(i).first & !COSTLY) as usize
-    }
-    /// The number of nodes.
+    /// The number of node slots.
     pub fn len(&self) -> usize {
         self.nodes.len()
     }
     pub fn is_empty(&self) -> bool {
         self.order.is_empty()
     }
-    /// The primitives under node `i`: the position of the first in `order`, and their
-    /// count. (An inner node's first primitive is its leftmost leaf's, which for the small
-    /// subtrees the collapse asks about lies a node or two after it.)
+}
+
+/// Binary nodes as the build lays them out: node 0 is the root, an inner node `i`'s left
+/// child is `i + 1` and its right child the node its `first` names. Stubs (see
+/// [`BvhNode::is_stub`]) stand for subtrees laid out elsewhere and have no children here.
+#[derive(Clone, Copy)]
+pub(crate) struct Nodes<'a>(&'a [MaybeUninit<BvhNode>]);
+
+impl<'a> Nodes<'a> {
+    /// # Safety
+    /// Node 0 and both children of every inner node written that is not a stub must be
+    /// written (the nodes reachable from the root); only those are read.
+    pub(crate) unsafe fn new(nodes: &'a [MaybeUninit<BvhNode>]) -> Self {
+        Nodes(nodes)
+    }
+    /// Node `i`; `i` must be the root or a child of a node read through here.
     #[inline]
-    pub fn prim_range(&self, i: usize) -> (u32, u32) {
+    pub(crate) fn node(&self, i: usize) -> &'a BvhNode {
+        // SAFETY: see `new`.
+        unsafe { self.0[i].assume_init_ref() }
+    }
+    /// Asks the cache for node `i` (a hint, for any `i`).
+    #[inline(always)]
+    pub(crate) fn prefetch(&self, i: usize) {
+        if let Some(n) = self.0.get(i) {
+            super::prefetch(n);
+        }
+    }
+    /// The right child of inner node `i`.
+    #[inline]
+    pub(crate) fn right(&self, i: usize) -> usize {
+        i + (self.node(i).first & !COSTLY) as usize
+    }
+    /// The primitives under node `i` (not a stub): the position of the first in the order,
+    /// and their count. (An inner node's first primitive is its leftmost leaf's, which for
+    /// the small subtrees the collapse asks about lies a node or two after it.)
+    #[inline]
+    pub(crate) fn prim_range(&self, i: usize) -> (u32, u32) {
         let mut k = i;
         while !self.node(k).is_leaf() {
             k += 1;
         }
         (self.node(k).first & !COSTLY, self.node(i).prims())
-    }
-    /// The order of the primitives, the nodes freed.
-    pub fn into_order(self) -> Vec<u32> {
-        self.order
-    }
-    /// The bounds of every primitive together (None without primitives).
-    pub fn bounds(&self) -> Option<Aabb> {
-        (!self.is_empty()).then(|| self.node(0).bounds())
     }
 }
 
@@ -263,17 +283,19 @@ const PARALLEL_MIN: usize = 1 << 14;
 const SAMPLE_MIN: usize = 1 << 11;
 const SAMPLES: usize = 1 << 10;
 
-/// Builds the binary tree over the primitives `0..n`, whose references `prim` gives (it is
-/// asked for each one several times, and must give the same answer each time): over the
-/// primitives themselves, or over clusters of them when there are at least
-/// [`CLUSTER_MIN`]. Marks its phases in `times`.
+/// Builds the BVH over the primitives `0..n`, whose references `prim` gives (it is asked
+/// for each one several times, and must give the same answer each time): the binary SAH
+/// tree over the primitives themselves, or over clusters of them when there are at least
+/// [`CLUSTER_MIN`], collapsed into the 4-wide tree. Returns that tree and the order of the
+/// primitives (`order[i]` is the caller's index of the tree's i-th primitive). Marks its
+/// phases in `times`.
 ///
 /// The references are asked for, not passed in an array, because an array of them is the
 /// build's largest (32 bytes a primitive, twice over once sorted along the curve), and on
 /// hosts that charge dearly for memory a process touches first (see docs/performance.md,
 /// "Fresh memory on this VM") computing a triangle's bounds again from its three vertices
 /// costs far less than storing them.
-pub fn build<F>(n: usize, prim: F, times: &mut BuildTimes) -> Bvh
+pub fn build<F>(n: usize, prim: F, times: &mut BuildTimes) -> (WideBvh, Vec<u32>)
 where
     F: Fn(u32) -> PrimRef + Sync,
 {
@@ -285,7 +307,9 @@ where
         times.mark("bounds");
         let bvh = build_sah(&mut refs);
         times.mark("binary SAH tree");
-        bvh
+        let wide = WideBvh::from_binary(&bvh);
+        times.mark("4-wide collapse");
+        (wide, bvh.order)
     }
 }
 
@@ -434,6 +458,12 @@ fn inner(b: &Aabb, right: usize, count: usize) -> BvhNode {
     }
 }
 
+/// A stub over `count` primitives, the first of them at `first` in the order (see
+/// [`BvhNode::is_stub`]).
+fn stub(b: &Aabb, first: usize, count: usize) -> BvhNode {
+    inner(b, first, count)
+}
+
 /// Writes the subtree over `refs` (standing for the primitives `first..first + order.len()`
 /// of the final order) into `nodes`, its root at `nodes[0]`, and the primitives' indices in
 /// the tree's order into `order`. `bounds` and `cbounds` are the bounds of the references
@@ -449,44 +479,73 @@ fn build_node<K: Kind>(
     bounds: Aabb,
     cbounds: Aabb,
 ) -> Sub {
+    match step::<K>(refs, order.len(), depth, &bounds, &cbounds) {
+        Step::Leaf => kind.leaf(nodes, order, refs, first, depth, &bounds),
+        Step::Sweep => sweep_node(kind, nodes, order, refs, first, depth, &bounds),
+        Step::Split(s) => interior(kind, nodes, order, refs, first, depth, &bounds, s),
+    }
+}
+
+/// What becomes of a node: a leaf, a small node whose subtree the exact sweep builds, or an
+/// inner node split as [`Split`] says.
+enum Step {
+    Leaf,
+    Sweep,
+    Split(Split),
+}
+
+/// A node's references split at `mid` (reordered so that those left of it go left): the
+/// left side's weight, and both sides' bounds and centroid bounds.
+struct Split {
+    mid: usize,
+    wl: Weight,
+    l: (Aabb, Aabb),
+    r: (Aabb, Aabb),
+}
+
+/// Decides the node over `refs` (standing for `w` primitives, at `depth`, with bounds
+/// `bounds` and centroid bounds `cbounds`), and for a split reorders `refs` by side.
+fn step<K: Kind>(
+    refs: &mut [PrimRef],
+    w: usize,
+    depth: usize,
+    bounds: &Aabb,
+    cbounds: &Aabb,
+) -> Step {
     let n = refs.len();
     if n == 1 {
-        return kind.leaf(nodes, order, refs, first, depth, &bounds);
+        return Step::Leaf;
     }
     let cext = cbounds.extent();
     if depth >= K::MEDIAN_DEPTH || cext.max_element() <= 0.0 {
         if n <= K::MAX_LEAF {
-            return kind.leaf(nodes, order, refs, first, depth, &bounds);
+            return Step::Leaf;
         }
         // Degenerate input (the SAH keeps peeling off few primitives, or all centroids
         // coincide): split at the object median along the widest centroid axis.
         let widest = widest_axis(cext);
         let mid = n / 2;
         refs.select_nth_unstable_by(mid, |a, b| a.c2()[widest].total_cmp(&b.c2()[widest]));
-        return interior_at(kind, nodes, order, refs, first, depth, &bounds, mid);
+        return Step::Split(split_at::<K>(refs, mid));
     }
     if n <= SWEEP_MAX {
-        return sweep_node(kind, nodes, order, refs, first, depth, &bounds);
+        return Step::Sweep;
     }
     let area = half_area(bounds.min, bounds.max).max(f32::MIN_POSITIVE);
-    match binned_split(refs, &cbounds, K::weight) {
-        Some(s) if split_pays::<K>(n, order.len(), area, s.cost) => {
+    match binned_split(refs, cbounds, K::weight) {
+        Some(s) if split_pays::<K>(n, w, area, s.cost) => {
             let (mid, wl, l, r) = partition(refs, s.cmin, s.scale, s.axis, s.limit, K::weight);
             if mid == 0 || mid == n {
                 // Cannot happen (the sampled bins held references on both sides); kept so
                 // that the node layout can never underflow.
-                return interior_at(kind, nodes, order, refs, first, depth, &bounds, n / 2);
+                return Step::Split(split_at::<K>(refs, n / 2));
             }
-            interior(
-                kind, nodes, order, refs, first, depth, &bounds, mid, wl, l, r,
-            )
+            Step::Split(Split { mid, wl, l, r })
         }
         // (Without a split every centroid lies in one bin along every axis; rare but
         // possible with centroids a few ulps apart.)
-        None if n > K::MAX_LEAF => {
-            interior_at(kind, nodes, order, refs, first, depth, &bounds, n / 2)
-        }
-        _ => kind.leaf(nodes, order, refs, first, depth, &bounds),
+        None if n > K::MAX_LEAF => Step::Split(split_at::<K>(refs, n / 2)),
+        _ => Step::Leaf,
     }
 }
 
@@ -515,38 +574,20 @@ fn widest_axis(e: Vec3A) -> usize {
     }
 }
 
-/// An inner node over `refs` split at `mid` as they lie.
-#[allow(clippy::too_many_arguments)]
-fn interior_at<K: Kind>(
-    kind: &K,
-    nodes: &mut [MaybeUninit<BvhNode>],
-    order: &mut [u32],
-    refs: &mut [PrimRef],
-    first: usize,
-    depth: usize,
-    bounds: &Aabb,
-    mid: usize,
-) -> Sub {
+/// `refs` split at `mid` as they lie.
+fn split_at<K: Kind>(refs: &[PrimRef], mid: usize) -> Split {
     let (l, r) = refs.split_at(mid);
     let (lb, lc, wl) = bounds_weight_of(l, K::weight);
-    let r = bounds_of(r);
-    interior(
-        kind,
-        nodes,
-        order,
-        refs,
-        first,
-        depth,
-        bounds,
+    Split {
         mid,
         wl,
-        (lb, lc),
-        r,
-    )
+        l: (lb, lc),
+        r: bounds_of(r),
+    }
 }
 
-/// Writes an inner node over `refs`, split at `mid` (the left side of weight `wl`), and
-/// builds its children (in parallel when both are large).
+/// Writes an inner node over `refs`, split as `split` says, and builds its children (in
+/// parallel when both are large).
 #[allow(clippy::too_many_arguments)]
 fn interior<K: Kind>(
     kind: &K,
@@ -556,11 +597,14 @@ fn interior<K: Kind>(
     first: usize,
     depth: usize,
     bounds: &Aabb,
-    mid: usize,
-    wl: Weight,
-    (lb, lc): (Aabb, Aabb),
-    (rb, rc): (Aabb, Aabb),
+    split: Split,
 ) -> Sub {
+    let Split {
+        mid,
+        wl,
+        l: (lb, lc),
+        r: (rb, rc),
+    } = split;
     let w = order.len();
     // (The weight on the left, not the references, lays out the nodes and the order.)
     let (sl, wl) = (slots_of(wl), prims_of(wl));

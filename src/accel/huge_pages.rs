@@ -20,6 +20,27 @@ pub fn zeroed(n: usize) -> Vec<u32> {
     v
 }
 
+/// An empty vector with room for `n` items, of which only a few scattered ones will be
+/// written: advised never to be backed by huge pages (a kernel that backs all memory with
+/// them would otherwise fill 2 MiB for each item written).
+pub fn sparse<T>(n: usize) -> Vec<T> {
+    let v = Vec::with_capacity(n);
+    #[cfg(target_os = "linux")]
+    {
+        const PAGE: usize = 4096;
+        let start = v.as_ptr() as usize;
+        let lo = (start + PAGE - 1) & !(PAGE - 1);
+        let hi = (start + n * std::mem::size_of::<T>()) & !(PAGE - 1);
+        if hi > lo {
+            // SAFETY: as in `advise`: advice on how to back memory this process owns.
+            unsafe {
+                libc::madvise(lo as *mut libc::c_void, hi - lo, libc::MADV_NOHUGEPAGE);
+            }
+        }
+    }
+    v
+}
+
 /// Asks for huge pages over the 2 MiB-aligned part of `start..start + len`. Only the
 /// kernel's choice of page size changes, never the memory's contents, and a kernel that
 /// cannot oblige (no THP, or disabled) returns an error that changes nothing, so it is

@@ -8,14 +8,14 @@
 
 mod packet;
 
-use super::bvh::Bvh;
+use super::bvh::{Bvh, Nodes};
 use crate::geometry::{ray::gamma, Aabb, Ray};
 use glam::Vec4;
 pub use packet::{ShadowPacket, PACKET};
 
 /// A child reference: an inner node index, or a leaf (high bit set) packing the first
 /// primitive (27 bits) and the primitive count (4 bits).
-type ChildRef = u32;
+pub(crate) type ChildRef = u32;
 const LEAF: u32 = 1 << 31;
 const EMPTY: u32 = u32::MAX;
 
@@ -34,6 +34,33 @@ pub struct Node4 {
     /// index (no selects per node).
     bounds: [Vec4; 6],
     child: [ChildRef; 4],
+}
+
+impl Node4 {
+    /// This node as it lies in a tree whose nodes were collapsed on their own, counted from
+    /// 0, and then placed from index `base` on: its inner children's references moved by
+    /// `base`.
+    #[inline]
+    pub(crate) fn rebased(mut self, base: u32) -> Node4 {
+        for c in &mut self.child {
+            *c = rebased(*c, base);
+        }
+        self
+    }
+    /// Sets child `slot`'s reference.
+    pub(crate) fn set_child(&mut self, slot: usize, r: ChildRef) {
+        self.child[slot] = r;
+    }
+}
+
+/// A child reference `r` of a subtree collapsed on its own, placed from index `base` on.
+#[inline]
+pub(crate) fn rebased(r: ChildRef, base: u32) -> ChildRef {
+    if r == EMPTY || r & LEAF != 0 {
+        r
+    } else {
+        r + base
+    }
 }
 
 #[derive(Clone, Debug, Default)]
@@ -55,7 +82,7 @@ pub struct WideBvh {
 /// instructions (wall time within noise, the tree being 2.3× smaller), and would cost the
 /// TNCG15 room, whose floor and ceiling fans it merges, 33 % (hence the size limits).
 const MERGE_MIN_PRIMS: usize = 4096;
-const MERGE_MAX: u32 = 4;
+pub(crate) const MERGE_MAX: u32 = 4;
 const MERGE_AREA: f32 = 12.0;
 
 /// The weight of fringe merging in a tree over `n` primitives within `root` (0: none).
@@ -78,48 +105,53 @@ pub(crate) fn merges(prims: u32, leaves: u32, costly: bool, bounds: &Aabb, weigh
         && bounds.surface_area() * weight < 1.0
 }
 
-/// The top of the tree, down to subtrees over at most this many primitives, and at most a
-/// sixty-fourth of the tree, is collapsed sequentially, and those subtrees in parallel (see
-/// `Collapse::top`): enough of them for the threads to share the work evenly.
-const PARALLEL_MIN: u32 = 1 << 15;
-const PARALLEL_SHARE: u32 = 64;
-
-/// What the collapse needs besides the binary tree.
-struct Collapse<'a> {
-    b: &'a Bvh,
-    /// Fringe subtrees whose surface area times this is below 1 become leaves (0: none).
+/// What the collapse reads: the binary nodes, and the tree's merge weight (fringe subtrees
+/// whose surface area times it is below 1 become leaves; 0: none).
+pub(crate) struct Collapse<'a> {
+    b: Nodes<'a>,
     merge_weight: f32,
-    /// Subtrees over at most this many primitives are collapsed as one parallel task.
-    parallel_min: u32,
+    /// The stubs a wide node would have opened (see [`Self::wanted`]).
+    wanted: std::cell::RefCell<Vec<usize>>,
 }
+
+/// A child slot of a wide node that the collapse left `EMPTY` for its caller, as it stands
+/// for a stub (a subtree collapsed elsewhere): the wide node (its index in the collapse's
+/// output), the slot, and the stub's binary node.
+pub(crate) type External = (usize, usize, usize);
+
+/// [`ArrayVec4`]'s mark for a child that is a leaf of the wide tree; inner children carry
+/// their surface area.
+const LEAF_KID: f32 = -1.0;
 
 impl WideBvh {
     /// Collapses a binary BVH; primitive indices keep the binary tree's order.
     pub fn from_binary(b: &Bvh) -> WideBvh {
-        let mut w = WideBvh {
-            nodes: Vec::new(),
-            root: EMPTY,
-            bounds: None,
-        };
         if b.is_empty() {
-            return w;
+            return WideBvh {
+                nodes: Vec::new(),
+                root: EMPTY,
+                bounds: None,
+            };
         }
-        let root = b.node(0);
-        w.bounds = Some(root.bounds());
-        let n = b.order.len();
-        let c = Collapse {
-            b,
-            merge_weight: merge_weight(n, &root.bounds()),
-            parallel_min: PARALLEL_MIN.max(root.prims() / PARALLEL_SHARE),
-        };
-        if root.is_leaf() {
-            let (first, count) = b.prim_range(0);
-            w.root = leaf_ref(first, count);
-        } else {
-            w.nodes = c.top();
-            w.root = 0;
+        let nodes = b.nodes();
+        let bounds = nodes.node(0).bounds();
+        let c = Collapse::new(nodes, merge_weight(b.order.len(), &bounds));
+        let mut out = Vec::new();
+        let root = c.subtree(0, &mut out, &mut Vec::new());
+        WideBvh {
+            nodes: out,
+            root,
+            bounds: Some(bounds),
         }
-        w
+    }
+
+    /// The tree of `nodes`, its root `root` (a node's index, or a leaf), within `bounds`.
+    pub(crate) fn from_parts(nodes: Vec<Node4>, root: ChildRef, bounds: Aabb) -> WideBvh {
+        WideBvh {
+            nodes,
+            root,
+            bounds: Some(bounds),
+        }
     }
 
     /// Inner node `i`, without a bounds check: inner child references are made by the
@@ -310,7 +342,22 @@ impl WideBvh {
     }
 }
 
-impl Collapse<'_> {
+impl<'a> Collapse<'a> {
+    pub(crate) fn new(b: Nodes<'a>, merge_weight: f32) -> Self {
+        Collapse {
+            b,
+            merge_weight,
+            wanted: Default::default(),
+        }
+    }
+
+    /// The stubs that the collapse so far would have opened, as a collapse of the whole
+    /// binary tree would: where there are any, the wide nodes it wrote are not that
+    /// collapse's, and the caller must build the stubs' children and collapse again.
+    pub(crate) fn wanted(self) -> Vec<usize> {
+        self.wanted.into_inner()
+    }
+
     /// Whether inner node `k` becomes a leaf: it has at most three leaves under it (its own
     /// wide node would be underfull), at most `MERGE_MAX` primitives, none costly (see
     /// `bvh::build`), and a small surface area. (The build records the leaves and the
@@ -326,95 +373,42 @@ impl Collapse<'_> {
         )
     }
 
-    /// The wide nodes of the whole tree (root inner), its root first. The top, down to
-    /// subtrees over at most `parallel_min` primitives, is collapsed here; those subtrees
-    /// are collapsed in parallel, in a fixed order after the top's nodes (the layout
-    /// depends on the tree alone, not on the threads). Each subtree's wide nodes are
-    /// counted first, so that it is collapsed straight into its own stretch of the tree's
-    /// array: counting costs a walk of the binary tree, where an array per subtree, copied
-    /// into the tree's, cost as much memory again as the tree's nodes, and fresh memory is
-    /// what the build spends most on (see docs/performance.md, "Fresh memory on this VM").
-    fn top(&self) -> Vec<Node4> {
-        let mut top = Vec::new();
-        // (wide node, slot, binary node) of each subtree left to the parallel collapse
-        let mut tasks = Vec::new();
-        self.collapse_top(0, &mut top, &mut tasks);
-        use rayon::prelude::*;
-        let counts: Vec<usize> = tasks.par_iter().map(|&(_, _, k)| self.count(k)).collect();
-        let total = top.len() + counts.iter().sum::<usize>();
-        let mut out: Vec<Node4> = super::huge_pages::with_capacity(total);
-        let mut jobs = Vec::with_capacity(tasks.len());
-        let mut base = top.len();
-        let mut rest = &mut out.spare_capacity_mut()[top.len()..total];
-        for (&(w, slot, k), &count) in tasks.iter().zip(&counts) {
-            top[w].child[slot] = base as ChildRef;
-            let (here, next) = std::mem::take(&mut rest).split_at_mut(count);
-            rest = next;
-            jobs.push((k, here, base as ChildRef));
-            base += count;
+    /// The reference to the subtree under binary node `i` (not a stub): a leaf, or the wide
+    /// node appended to `out` for it, its subtree after it, each node's index its position
+    /// in `out`. Children that are stubs (subtrees collapsed elsewhere) are left `EMPTY` and
+    /// listed in `ext`.
+    pub(crate) fn subtree(
+        &self,
+        i: usize,
+        out: &mut Vec<Node4>,
+        ext: &mut Vec<External>,
+    ) -> ChildRef {
+        debug_assert!(!self.b.node(i).is_stub());
+        if self.b.node(i).is_leaf() || self.fringe(i) {
+            let (first, count) = self.b.prim_range(i);
+            leaf_ref(first, count)
+        } else {
+            self.collapse(i, out, ext)
         }
-        jobs.into_par_iter().for_each(|(k, buf, base)| {
-            let mut stretch = Stretch { buf, len: 0, base };
-            self.collapse(k, &mut stretch);
-            // (`set_len` below relies on this.)
-            assert_eq!(
-                stretch.len,
-                stretch.buf.len(),
-                "count and collapse disagree"
-            );
-        });
-        // SAFETY: the jobs wrote every slot from top.len() to total (asserted above), and
-        // top fills the rest.
-        unsafe {
-            std::ptr::copy_nonoverlapping(top.as_ptr(), out.as_mut_ptr(), top.len());
-            out.set_len(total);
-        }
-        out
     }
 
-    /// The sequential top of [`Self::top`]: appends the wide node for binary inner node `i`
-    /// to `out`, and recurses into its inner children over more than `parallel_min`
-    /// primitives; the others go to `tasks`.
-    fn collapse_top(&self, i: usize, out: &mut Vec<Node4>, tasks: &mut Vec<(usize, usize, usize)>) {
+    /// Appends the wide node for binary inner node `i` and its subtree to `out` (depth
+    /// first, each node before its children); returns its index.
+    fn collapse(&self, i: usize, out: &mut Vec<Node4>, ext: &mut Vec<External>) -> ChildRef {
         let (node, kids) = self.node(i);
         let index = out.len();
         out.push(node);
         for (slot, &(k, area)) in kids.iter().enumerate() {
-            if area < 0.0 {
-                continue;
-            }
-            if self.b.node(k).prims() > self.parallel_min {
-                let r = out.len() as ChildRef;
-                out[index].child[slot] = r;
-                self.collapse_top(k, out, tasks);
-            } else {
-                tasks.push((index, slot, k));
-            }
-        }
-    }
-
-    /// The number of wide nodes of the subtree under binary inner node `i`.
-    fn count(&self, i: usize) -> usize {
-        let kids = self.kids(i);
-        1 + kids
-            .iter()
-            .filter(|&&(_, area)| area >= 0.0)
-            .map(|&(k, _)| self.count(k))
-            .sum::<usize>()
-    }
-
-    /// Appends the wide node for binary inner node `i` and its subtree to `out`; returns
-    /// its index.
-    fn collapse(&self, i: usize, out: &mut Stretch) -> ChildRef {
-        let (node, kids) = self.node(i);
-        let index = out.push(node);
-        for (slot, &(k, area)) in kids.iter().enumerate() {
             if area >= 0.0 {
-                let r = self.collapse(k, out);
-                out.node_mut(index).child[slot] = r;
+                if self.b.node(k).is_stub() {
+                    ext.push((index, slot, k));
+                } else {
+                    let r = self.collapse(k, out, ext);
+                    out[index].child[slot] = r;
+                }
             }
         }
-        index
+        index as ChildRef
     }
 
     /// The wide node for binary inner node `i`, its inner children's references left
@@ -434,7 +428,7 @@ impl Collapse<'_> {
                 node.bounds[2 * axis][slot] = kn.min[axis];
                 node.bounds[2 * axis + 1][slot] = kn.max[axis];
             }
-            if area < 0.0 {
+            if area == LEAF_KID {
                 let (first, count) = b.prim_range(k);
                 node.child[slot] = leaf_ref(first, count);
             }
@@ -443,12 +437,17 @@ impl Collapse<'_> {
     }
 
     /// The children of the wide node for binary inner node `i`: (binary node, its surface
-    /// area, or −1 for a leaf).
+    /// area, or `LEAF_KID` for a leaf). A stub it would open is listed in `wanted`, and
+    /// left as it is.
     #[inline]
     fn kids(&self, i: usize) -> ArrayVec4 {
         let b = self.b;
         let kid = |k: usize| {
             let n = b.node(k);
+            if n.is_stub() {
+                // (A stub is an inner node, never a fringe one: see `BvhNode::is_stub`.)
+                return (k, n.bounds().surface_area());
+            }
             let inner = !n.is_leaf() && !self.fringe(k);
             if inner {
                 // Its right child lies far from it in the array and is read next, when
@@ -461,7 +460,7 @@ impl Collapse<'_> {
                 if inner {
                     n.bounds().surface_area()
                 } else {
-                    -1.0
+                    LEAF_KID
                 },
             )
         };
@@ -477,36 +476,17 @@ impl Collapse<'_> {
             }
             let Some((pos, _)) = best else { break };
             let k = kids[pos].0;
+            if b.node(k).is_stub() {
+                // Its children are not built yet: the caller builds them and collapses
+                // again (see `Collapse::wanted`).
+                self.wanted.borrow_mut().push(k);
+                break;
+            }
             kids[pos] = kid(k + 1);
             kids[len] = kid(b.right(k));
             len += 1;
         }
         ArrayVec4 { kids, len }
-    }
-}
-
-/// A subtree's stretch of the wide tree's array, filled from its start; `base` is the
-/// index of its first slot in the whole array.
-struct Stretch<'a> {
-    buf: &'a mut [std::mem::MaybeUninit<Node4>],
-    len: usize,
-    base: ChildRef,
-}
-
-impl Stretch<'_> {
-    /// Writes `node` in the next slot (panics past the end); returns its index in the whole
-    /// array.
-    fn push(&mut self, node: Node4) -> ChildRef {
-        self.buf[self.len].write(node);
-        self.len += 1;
-        self.base + (self.len - 1) as ChildRef
-    }
-    /// The node at index `i` of the whole array, which `push` returned.
-    fn node_mut(&mut self, i: ChildRef) -> &mut Node4 {
-        let k = (i - self.base) as usize;
-        assert!(k < self.len);
-        // SAFETY: slots below `len` were written by `push`.
-        unsafe { self.buf[k].assume_init_mut() }
     }
 }
 
@@ -614,5 +594,79 @@ impl<T: Copy> Stack<T> {
         self.len -= 1;
         // SAFETY: every slot below `len` was written by `push`.
         Some(unsafe { self.items.get_unchecked(self.len).assume_init() })
+    }
+}
+
+#[cfg(test)]
+impl WideBvh {
+    /// Checks the tree over primitives whose bounds `bounds_of` gives (by the caller's
+    /// index; `order` as the build returned it), and panics where it fails: every node of
+    /// the array reached exactly once from the root, each with at least two children; every
+    /// primitive in exactly one leaf of at most `max_leaf`; every child's box inside its
+    /// parent's and holding its primitives; no path deeper than `bvh::MAX_DEPTH`. Returns
+    /// the leaves' primitive counts.
+    pub(crate) fn check(
+        &self,
+        order: &[u32],
+        bounds_of: impl Fn(u32) -> Aabb,
+        max_leaf: u32,
+    ) -> Vec<u32> {
+        let root = self.bounds.expect("a tree over primitives has bounds");
+        let inside = |a: &Aabb, b: &Aabb| a.min.cmpge(b.min).all() && a.max.cmple(b.max).all();
+        let mut seen = vec![false; order.len()];
+        let mut reached = vec![false; self.nodes.len()];
+        let mut leaves = Vec::new();
+        let mut stack = vec![(self.root, root, 1usize)];
+        while let Some((c, b, depth)) = stack.pop() {
+            assert!(depth <= super::bvh::MAX_DEPTH, "a path {depth} nodes deep");
+            if c & LEAF != 0 {
+                let (first, count) = ((c & !LEAF) >> 4, c & 15);
+                assert!((1..=max_leaf).contains(&count), "a leaf of {count}");
+                leaves.push(count);
+                for pos in first..first + count {
+                    let p = pos as usize;
+                    assert!(!seen[p], "position {p} in two leaves");
+                    seen[p] = true;
+                    assert!(
+                        inside(&bounds_of(order[p]), &b),
+                        "a primitive outside its leaf"
+                    );
+                }
+                continue;
+            }
+            let i = c as usize;
+            assert!(!reached[i], "node {i} reached twice");
+            reached[i] = true;
+            let n = &self.nodes[i];
+            let mut kids = 0;
+            for slot in 0..4 {
+                if n.child[slot] == EMPTY {
+                    continue;
+                }
+                kids += 1;
+                let kb = Aabb {
+                    min: glam::Vec3A::new(n.bounds[0][slot], n.bounds[2][slot], n.bounds[4][slot]),
+                    max: glam::Vec3A::new(n.bounds[1][slot], n.bounds[3][slot], n.bounds[5][slot]),
+                };
+                assert!(inside(&kb, &b), "a child's box outside its parent's");
+                stack.push((n.child[slot], kb, depth + 1));
+            }
+            assert!(kids >= 2, "node {i} has {kids} children");
+        }
+        assert!(seen.iter().all(|&s| s), "a primitive in no leaf");
+        assert!(reached.iter().all(|&r| r), "a node the root does not reach");
+        leaves
+    }
+
+    /// The nodes' bits and the root, to compare two trees bit for bit.
+    pub(crate) fn bits(&self) -> (Vec<u32>, ChildRef) {
+        let mut bits = Vec::new();
+        for n in &self.nodes {
+            for v in &n.bounds {
+                bits.extend(v.to_array().map(f32::to_bits));
+            }
+            bits.extend(n.child);
+        }
+        (bits, self.root)
     }
 }

@@ -6,7 +6,7 @@ use super::{
     META_MATERIAL, SPHERE,
 };
 use crate::accel::bvh::{self, PrimRef};
-use crate::accel::{huge_pages, BuildTimes, WideBvh};
+use crate::accel::{huge_pages, BuildTimes};
 use crate::geometry::{Aabb, Sphere, Triangle};
 use crate::light::{AreaLight, LightShape, Lights, OtherLight};
 use glam::Vec3A;
@@ -146,8 +146,8 @@ impl Scene {
             let idx = &tris[i as usize];
             PrimRef::new(&bounds_of(idx), i, idx[0] == SPHERE)
         };
-        let bvh = bvh::build(tris.len(), prim, &mut times);
-        let radius = bvh
+        let (wide, order) = bvh::build(tris.len(), prim, &mut times);
+        let radius = wide
             .bounds()
             .map_or(1.0, |world| 0.5 * (world.max - world.min).length());
         let others = desc
@@ -173,12 +173,9 @@ impl Scene {
             .collect();
         // The padding vertex that `Scene::vertex_fast` may read past the last one.
         positions.push(glam::Vec3::ZERO);
-        let wide = WideBvh::from_binary(&bvh);
-        times.mark("4-wide collapse");
-        // The binary tree's nodes are freed before the triangles are reordered, and each
-        // old array as soon as its reordered copy is made, so that the copies reuse memory
-        // the build has touched already (see `bvh::build` on fresh memory).
-        let order = bvh.into_order();
+        // Each old array is freed as soon as its reordered copy is made, so that the next
+        // copy reuses memory the build has touched already (see `bvh::build` on fresh
+        // memory).
         let tris = permuted(tris, &order);
         let meta = permuted(meta, &order);
         times.mark("reorder");

@@ -26,10 +26,9 @@
 //! the cluster forms, to count its nodes, so that the node array holds no gaps.
 
 use super::{
-    bounds_of, build_node, finish, half_area, inner, slots_of, Bvh, BvhNode, Kind, PrimRef, Prims,
-    Sub, Weight, MAX_DEPTH,
+    finish, fused, half_area, inner, BvhNode, Kind, PrimRef, Prims, Sub, Weight, MAX_DEPTH,
 };
-use crate::accel::wide::merges;
+use crate::accel::wide::{merges, WideBvh};
 use crate::accel::{huge_pages, BuildTimes};
 use crate::geometry::Aabb;
 use glam::Vec3A;
@@ -53,7 +52,7 @@ const RADIX_BITS: u32 = 10;
 /// its primitives), and below each cluster the SAH tree over its own primitives. Nodes count
 /// primitives, as in a tree built over them directly. No array of the primitives'
 /// references is kept: each phase asks `prim` again for those it needs (see [`super::build`]).
-pub(super) fn build<F>(n: usize, prim: &F, times: &mut BuildTimes) -> Bvh
+pub(super) fn build<F>(n: usize, prim: &F, times: &mut BuildTimes) -> (WideBvh, Vec<u32>)
 where
     F: Fn(u32) -> PrimRef + Sync,
 {
@@ -67,25 +66,15 @@ where
         .enumerate()
         .map(|(c, chunk)| clusters_of(chunk, (c * CHUNK) as u32, prim, merge_weight))
         .collect();
+    times.mark("parts");
     let mut clusters = concatenate(parts);
     times.mark("clusters");
-    // The nodes, exactly: each cluster's own tree, and one inner node fewer than clusters
-    // above them.
-    let total: Weight = clusters.iter().map(PrimRef::cluster_weight).sum();
-    let mut nodes: Vec<MaybeUninit<BvhNode>> = huge_pages::with_capacity(slots_of(total));
-    // SAFETY: MaybeUninit needs no initialisation.
-    unsafe { nodes.set_len(slots_of(total)) };
-    let mut order = huge_pages::zeroed(n);
-    let (b, cb) = bounds_of(&clusters);
-    debug_assert_eq!((b.min, b.max), (world.min, world.max));
     let kind = Clusters {
         keys: &keys,
         prim,
         merge_weight,
     };
-    let _ = build_node(&kind, &mut nodes, &mut order, &mut clusters, 0, 0, b, cb);
-    times.mark("binary SAH tree");
-    Bvh { nodes, order }
+    fused::build(&kind, &mut clusters, n, merge_weight, times)
 }
 
 /// Clusters of primitives: a leaf of the tree over them is one cluster, under which the
@@ -441,56 +430,26 @@ mod tests {
         assert_eq!(keys, expected);
     }
 
-    /// Every primitive in exactly one leaf, leaves of at most `MAX_LEAF`, every node's
-    /// bounds holding its primitives' and its children's, children splitting their parent's
-    /// range of the order, no path deeper than `MAX_DEPTH`, and every slot of the node array
-    /// holding exactly one node of the tree.
+    /// Builds the tree over `boxes` (by [`build`], whatever their number) and checks it
+    /// (see `WideBvh::check`).
     fn check_tree(boxes: &[Aabb]) {
         let n = boxes.len();
         let prim = |i: u32| PrimRef::new(&boxes[i as usize], i, false);
-        let bvh = build(n, &prim, &mut BuildTimes::start());
-        let mut seen = vec![false; n];
-        let mut slot_used = vec![false; bvh.len()];
-        let mut stack = vec![(0usize, 1usize)];
-        while let Some((i, depth)) = stack.pop() {
-            assert!(depth <= MAX_DEPTH, "a path {depth} nodes deep");
-            assert!(!slot_used[i], "slot {i} reached twice");
-            slot_used[i] = true;
-            let node = bvh.node(i);
-            let (first, count) = bvh.prim_range(i);
-            let nb = node.bounds();
-            for &p in &bvh.order[first as usize..(first + count) as usize] {
-                let b = &boxes[p as usize];
-                assert!(nb.min.cmple(b.min).all() && nb.max.cmpge(b.max).all());
-            }
-            if node.is_leaf() {
-                assert!((1..=super::super::MAX_LEAF as u32).contains(&count));
-                for &p in &bvh.order[first as usize..(first + count) as usize] {
-                    assert!(!seen[p as usize], "primitive {p} twice");
-                    seen[p as usize] = true;
-                }
-            } else {
-                let (r, (lf, lc), (rf, rc)) = (
-                    bvh.right(i),
-                    bvh.prim_range(i + 1),
-                    bvh.prim_range(bvh.right(i)),
-                );
-                assert_eq!((lf, rf, lc + rc), (first, first + lc, count));
-                stack.extend([(i + 1, depth + 1), (r, depth + 1)]);
-            }
-        }
-        assert!(seen.iter().all(|&s| s), "a primitive in no leaf");
-        assert!(slot_used.iter().all(|&u| u), "a slot holding no node");
+        let (wide, order) = build(n, &prim, &mut BuildTimes::start());
+        let mut sorted = order.clone();
+        sorted.sort();
+        assert!(sorted.iter().enumerate().all(|(i, &p)| p == i as u32));
+        let _ = wide.check(&order, |p| boxes[p as usize], super::super::MAX_LEAF as u32);
     }
 
-    #[test]
-    fn clustered_tree_covers_every_primitive_once() {
-        let mut x = 12345u32;
+    /// Random small boxes, their centres spread unevenly along the axes.
+    fn random_boxes(n: usize, seed: u32) -> Vec<Aabb> {
+        let mut x = seed;
         let mut f = || {
             x = x.wrapping_mul(747796405).wrapping_add(2891336453);
             (x >> 8) as f32 / (1 << 24) as f32
         };
-        let boxes: Vec<Aabb> = (0..5000)
+        (0..n)
             .map(|_| {
                 let c = Vec3A::new(f(), f() * 3.0, f()) * 10.0;
                 let h = Vec3A::new(f(), f(), f()) * 0.05;
@@ -499,8 +458,35 @@ mod tests {
                     max: c + h,
                 }
             })
-            .collect();
-        check_tree(&boxes);
+            .collect()
+    }
+
+    /// Fewer primitives than one subtree of the second stage (the root a stub), and enough
+    /// for a top of a few hundred nodes.
+    #[test]
+    fn clustered_tree_covers_every_primitive_once() {
+        check_tree(&random_boxes(5000, 12345));
+        check_tree(&random_boxes(300_000, 777));
+    }
+
+    /// The second stage places the subtrees in their order whatever thread finishes first:
+    /// built on one thread and on three, the trees are the same bit for bit.
+    #[test]
+    fn clustered_tree_is_the_same_on_any_thread_count() {
+        let boxes = random_boxes(200_000, 4242);
+        let prim = |i: u32| PrimRef::new(&boxes[i as usize], i, false);
+        let trees: Vec<_> = [1, 3]
+            .map(|threads| {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let (wide, order) =
+                    pool.install(|| build(boxes.len(), &prim, &mut BuildTimes::start()));
+                (wide.bits(), order)
+            })
+            .into();
+        assert!(trees[0] == trees[1], "the trees differ");
     }
 
     /// Degenerate inputs: every box the same (no centroid extent at all), and boxes a few
