@@ -60,14 +60,22 @@ where
     times.mark("Morton sort");
     let merge_weight = crate::accel::wide::merge_weight(n, &world);
     // Clusters: runs of consecutive primitives, formed in fixed chunks of the curve (so the
-    // result depends on the input only, not on the threads).
-    let parts: Vec<Vec<PrimRef>> = keys
+    // result depends on the input only, not on the threads), each chunk's written into its
+    // own stretch of a staging array with room for a cluster per primitive, of which the
+    // memory is touched only where written (about a third) and given back to the system
+    // once the clusters are gathered. (A vector per chunk came from the allocator's
+    // thread arenas, which kept about 90 MB of it at 10 M triangles after it was freed.)
+    let mut staging: Vec<MaybeUninit<PrimRef>> = huge_pages::sparse(n);
+    // SAFETY: MaybeUninit needs no initialisation.
+    unsafe { staging.set_len(n) };
+    let counts: Vec<usize> = keys
         .par_chunks(CHUNK)
+        .zip(staging.par_chunks_mut(CHUNK))
         .enumerate()
-        .map(|(c, chunk)| clusters_of(chunk, (c * CHUNK) as u32, prim, merge_weight))
+        .map(|(c, (chunk, out))| clusters_of(chunk, (c * CHUNK) as u32, prim, merge_weight, out))
         .collect();
-    times.mark("parts");
-    let mut clusters = concatenate(parts);
+    let mut clusters = concatenate(&staging, &counts);
+    drop(staging);
     times.mark("clusters");
     let kind = Clusters {
         keys: &keys,
@@ -80,9 +88,9 @@ where
 /// Clusters of primitives: a leaf of the tree over them is one cluster, under which the
 /// tree over its primitives is built.
 struct Clusters<'a, F> {
-    /// The sorted keys, whose low halves are the primitives in Morton order: a cluster's
-    /// reference holds the position of its first in its index lane.
-    keys: &'a [u64],
+    /// The primitives in Morton order: a cluster's reference holds the position of its
+    /// first in its index lane.
+    keys: &'a [u32],
     prim: &'a F,
     /// The wide collapse's merge weight: subtrees it would merge into one leaf are built
     /// as that leaf (see [`run_tree`]).
@@ -115,7 +123,7 @@ impl<F: Fn(u32) -> PrimRef + Sync> Kind for Clusters<'_, F> {
         let keys = &self.keys[start..start + order.len()];
         let mut prims = [PrimRef::EMPTY; CLUSTER_SIZE];
         for (p, &k) in prims.iter_mut().zip(keys) {
-            *p = (self.prim)(k as u32);
+            *p = (self.prim)(k);
         }
         let (sub, used) = run_tree(
             nodes,
@@ -219,21 +227,22 @@ fn run_tree(
     (finish(head, a.join(b)), 1 + l + r)
 }
 
-/// The chunks' clusters one after the other (copied in parallel, each part to its own
-/// stretch).
-fn concatenate(parts: Vec<Vec<PrimRef>>) -> Vec<PrimRef> {
-    let count: usize = parts.iter().map(Vec::len).sum();
+/// The chunks' clusters one after the other: the first `counts[c]` of chunk c's stretch of
+/// `staging` (copied in parallel, each chunk's to its own stretch).
+fn concatenate(staging: &[MaybeUninit<PrimRef>], counts: &[usize]) -> Vec<PrimRef> {
+    let count: usize = counts.iter().sum();
     let mut clusters: Vec<PrimRef> = huge_pages::with_capacity(count);
-    let mut jobs = Vec::with_capacity(parts.len());
+    let mut jobs = Vec::with_capacity(counts.len());
     let mut rest = &mut clusters.spare_capacity_mut()[..count];
-    for c in parts {
-        let (here, next) = std::mem::take(&mut rest).split_at_mut(c.len());
+    for (part, &c) in staging.chunks(CHUNK).zip(counts) {
+        let (here, next) = std::mem::take(&mut rest).split_at_mut(c);
         rest = next;
-        jobs.push((c, here));
+        jobs.push((&part[..c], here));
     }
-    jobs.into_par_iter().for_each(|(c, out)| {
-        for (o, r) in out.iter_mut().zip(c) {
-            o.write(r);
+    jobs.into_par_iter().for_each(|(part, out)| {
+        for (o, r) in out.iter_mut().zip(part) {
+            // SAFETY: `clusters_of` wrote the first `counts[c]` of its stretch.
+            o.write(unsafe { r.assume_init() });
         }
     });
     // SAFETY: the parts' stretches cover 0..count, and each was written whole.
@@ -241,17 +250,25 @@ fn concatenate(parts: Vec<Vec<PrimRef>>) -> Vec<PrimRef> {
     clusters
 }
 
-/// The clusters of one chunk of the sorted keys, whose first is the `base`-th: a reference
-/// to each, with its primitives and nodes, and the position of its first primitive in the
-/// keys in place of an index. A cluster takes the next primitive while it has fewer than
-/// `CLUSTER_SIZE` and its bounds' surface area stays within `CLUSTER_AREA` times the sum of
-/// its primitives' (so it never spans a jump of the curve).
-fn clusters_of<F>(chunk: &[u64], base: u32, prim: &F, merge_weight: f32) -> Vec<PrimRef>
+/// The clusters of one chunk of the sorted primitives, whose first is the `base`-th, written
+/// into `out`; returns their number. Each is a reference with its primitives and nodes, and
+/// the position of its first primitive in the curve's order in place of an index. A cluster
+/// takes the next primitive while it has fewer than `CLUSTER_SIZE` and its bounds' surface
+/// area stays within `CLUSTER_AREA` times the sum of its primitives' (so it never spans a
+/// jump of the curve).
+fn clusters_of<F>(
+    chunk: &[u32],
+    base: u32,
+    prim: &F,
+    merge_weight: f32,
+    out: &mut [MaybeUninit<PrimRef>],
+) -> usize
 where
     F: Fn(u32) -> PrimRef,
 {
     let mut first = base;
-    let mut out = Vec::with_capacity(chunk.len() / 2 + 1);
+    // (At most one cluster a primitive, so `out` has room.)
+    let mut count = 0;
     // The cluster's primitives, whose tree is built once here to count its nodes.
     let mut prims = [PrimRef::EMPTY; CLUSTER_SIZE];
     let mut scratch = [MaybeUninit::<BvhNode>::uninit(); 2 * CLUSTER_SIZE - 1];
@@ -268,16 +285,17 @@ where
         );
         PrimRef::cluster(cb, first, len as u32, slots as u32)
     };
-    prims[0] = prim(chunk[0] as u32);
+    prims[0] = prim(chunk[0]);
     let mut cb = prims[0].bounds();
     let (mut sum, mut len) = (cb.surface_area(), 1);
     for (i, &k) in chunk.iter().enumerate().skip(1) {
-        let r = prim(k as u32);
+        let r = prim(k);
         let b = r.bounds();
         let u = Aabb::union(&cb, &b);
         let a = b.surface_area();
         if len == CLUSTER_SIZE || u.surface_area() > CLUSTER_AREA * (sum + a) {
-            out.push(close(&prims[..len], &cb, first));
+            out[count].write(close(&prims[..len], &cb, first));
+            count += 1;
             first = base + i as u32;
             (cb, sum, len) = (b, a, 1);
         } else {
@@ -285,13 +303,14 @@ where
         }
         prims[len - 1] = r;
     }
-    out.push(close(&prims[..len], &cb, first));
-    out
+    out[count].write(close(&prims[..len], &cb, first));
+    count + 1
 }
 
-/// The primitives' keys (Morton code of the centroid in the high 32 bits, index in the low),
-/// sorted, and the bounds of all primitives. Keys are distinct, so the order is unique.
-fn sorted_keys<F>(n: usize, prim: &F) -> (Vec<u64>, Aabb)
+/// The primitives sorted by their keys (Morton code of the centroid in the high 32 bits,
+/// index in the low), and the bounds of all primitives. Keys are distinct, so the order is
+/// unique.
+fn sorted_keys<F>(n: usize, prim: &F) -> (Sorted, Aabb)
 where
     F: Fn(u32) -> PrimRef + Sync,
 {
@@ -325,8 +344,7 @@ where
             (code as u64) << 32 | i as u64
         })
         .collect_into_vec(&mut keys);
-    radix_sort_high(&mut keys);
-    (keys, world)
+    (radix_sort_high(keys), world)
 }
 
 /// The low 10 bits of `x` moved to every third bit (bit i to bit 3i).
@@ -340,12 +358,31 @@ fn spread(x: u32) -> u32 {
     x
 }
 
-/// Sorts keys by their high 32 bits (of which the low `CODE_BITS` are used), stably: an LSD
-/// radix sort, three passes of `RADIX_BITS`. Each pass splits the keys into blocks, counts
-/// each block's digits in parallel, and scatters the blocks in parallel, each key to its
-/// digit's place after the keys of lower digits and of the same digit in earlier blocks, so
-/// the result is the sequential pass's, whatever the blocks or threads.
-fn radix_sort_high(keys: &mut Vec<u64>) {
+/// The primitives in curve order (the low halves of the sorted keys), as 4-byte indices in
+/// the first half of the sort's spare buffer (see [`radix_sort_high`]).
+pub(super) struct Sorted {
+    buf: Vec<u64>,
+    n: usize,
+}
+
+impl std::ops::Deref for Sorted {
+    type Target = [u32];
+    fn deref(&self) -> &[u32] {
+        // SAFETY: the sort's last pass wrote the first `n` u32s of the buffer, which has room
+        // for 2n (u64's alignment is more than u32's).
+        unsafe { std::slice::from_raw_parts(self.buf.as_ptr() as *const u32, self.n) }
+    }
+}
+
+/// Sorts keys by their high 32 bits (of which the low `CODE_BITS` are used), stably, and
+/// returns their low halves: an LSD radix sort, three passes of `RADIX_BITS`. Each pass
+/// splits the keys into blocks, counts each block's digits in parallel, and scatters the
+/// blocks in parallel, each key to its digit's place after the keys of lower digits and of
+/// the same digit in earlier blocks, so the result is the sequential pass's, whatever the
+/// blocks or threads. The last pass writes only the low halves, into the first half of the
+/// buffer the pass before read from; the keys' own buffer is then freed and the second half
+/// of the other given back to the system (the build's fresh memory, see `super::build`).
+fn radix_sort_high(mut keys: Vec<u64>) -> Sorted {
     const PASSES: usize = (CODE_BITS / RADIX_BITS) as usize;
     const BUCKETS: usize = 1 << RADIX_BITS;
     let n = keys.len();
@@ -373,6 +410,7 @@ fn radix_sort_high(keys: &mut Vec<u64>) {
                 sum += c[d];
             }
         }
+        let last = p == PASSES - 1;
         let out = Scatter(tmp.spare_capacity_mut().as_mut_ptr());
         keys.par_chunks(block)
             .zip(places)
@@ -382,16 +420,31 @@ fn radix_sort_high(keys: &mut Vec<u64>) {
                     let d = &mut place[digit(k)];
                     // SAFETY: the places of (block, digit) run from the sums of the keys
                     // before them to that plus the block's count of the digit: the ranges
-                    // tile 0..n, and each is written once, by this block only.
-                    unsafe { (*out.0.add(*d as usize)).write(k) };
+                    // tile 0..n, and each is written once, by this block only. (The last
+                    // pass writes 4-byte halves, of which the buffer holds 2n.)
+                    unsafe {
+                        if last {
+                            (out.0 as *mut u32).add(*d as usize).write(k as u32);
+                        } else {
+                            (*out.0.add(*d as usize)).write(k);
+                        }
+                    }
                     *d += 1;
                 }
             });
+        if last {
+            break;
+        }
         // SAFETY: the scatter wrote every place below n.
         unsafe { tmp.set_len(n) };
-        std::mem::swap(keys, &mut tmp);
+        std::mem::swap(&mut keys, &mut tmp);
         tmp.clear();
     }
+    drop(keys);
+    let half = tmp.as_ptr() as usize + 4 * n;
+    // SAFETY: the second half of the buffer is never read (`Sorted` reads the first).
+    unsafe { huge_pages::release(half, 4 * n) };
+    Sorted { buf: tmp, n }
 }
 
 /// The output of a scatter, written at disjoint places from several threads.
@@ -415,7 +468,7 @@ mod tests {
     #[test]
     fn radix_sort_matches_a_comparison_sort() {
         let mut x = 0x9e37_79b9_7f4a_7c15u64;
-        let mut keys: Vec<u64> = (0..20_000u64)
+        let keys: Vec<u64> = (0..20_000u64)
             .map(|i| {
                 x ^= x << 13;
                 x ^= x >> 7;
@@ -426,8 +479,8 @@ mod tests {
             .collect();
         let mut expected = keys.clone();
         expected.sort();
-        radix_sort_high(&mut keys);
-        assert_eq!(keys, expected);
+        let expected: Vec<u32> = expected.iter().map(|&k| k as u32).collect();
+        assert_eq!(&radix_sort_high(keys)[..], &expected[..]);
     }
 
     /// Builds the tree over `boxes` (by [`build`], whatever their number) and checks it

@@ -113,7 +113,6 @@ pub(super) fn build<K: Kind>(
     let stubs: Vec<usize> = tasks.keys().copied().collect();
     // A subtree's wide nodes are at most its binary inner nodes, half its slots.
     let most = wide_top.len() + tasks.values().map(|t| t.slots / 2).sum::<usize>();
-    times.mark("before wide alloc");
     let mut nodes: Vec<Node4> = huge_pages::with_capacity(most);
     let (roots, len) = subtrees(
         kind,
@@ -129,7 +128,6 @@ pub(super) fn build<K: Kind>(
             .expect("every stub is a subtree of the second stage");
         wide_top[w].set_child(slot, roots[j]);
     }
-    times.mark("after subtrees");
     drop(top_nodes);
     // SAFETY: `subtrees` wrote the slots from `wide_top.len()` to `len`, and the top fills
     // those before.
@@ -346,6 +344,10 @@ fn expand<'a, K: Kind>(
 /// The second stage's bookkeeping: subtrees are placed in the order of their numbers, each
 /// after those before it.
 struct Placing {
+    /// Where each subtree's references end in memory (they lie in its order), and the end
+    /// of those given back to the system (see `subtrees`).
+    ends: Vec<usize>,
+    released: usize,
     /// The next subtree to place, and where its nodes go.
     next: usize,
     cursor: usize,
@@ -359,8 +361,11 @@ struct Placing {
 }
 
 impl Placing {
-    /// Places every done subtree that can be: returns where each goes, with its nodes.
-    fn ready(&mut self, end: usize) -> Vec<(usize, Vec<Node4>)> {
+    /// Places every done subtree that can be: returns where each goes, with its nodes, and
+    /// the memory of the references that all placed subtrees are done with, in whole huge
+    /// pages not returned before.
+    fn ready(&mut self, end: usize) -> (Vec<Placed>, Option<(usize, usize)>) {
+        const HUGE_PAGE: usize = 2 << 20;
         let mut ready = Vec::new();
         while let Some(i) = self.done.iter().position(|d| d.0 == self.next) {
             let (j, nodes, root) = self.done.swap_remove(i);
@@ -374,9 +379,15 @@ impl Placing {
             self.next += 1;
             ready.push((base, nodes));
         }
-        ready
+        let done = self.next.checked_sub(1).map_or(0, |j| self.ends[j]) & !(HUGE_PAGE - 1);
+        let release = (done > self.released).then(|| (self.released, done - self.released));
+        self.released = self.released.max(done);
+        (ready, release)
     }
 }
+
+/// A subtree's place in the output array, and its wide nodes to copy there.
+type Placed = (usize, Vec<Node4>);
 
 /// The output array of the second stage, written at disjoint places from several threads.
 struct Out(*mut MaybeUninit<Node4>);
@@ -395,9 +406,16 @@ fn subtrees<K: Kind>(
     start: usize,
 ) -> (Vec<ChildRef>, usize) {
     let count = tasks.len();
+    let ends = tasks
+        .iter()
+        .map(|t| t.refs.as_ptr_range().end as usize)
+        .collect();
+    let released = tasks.first().map_or(0, |t| t.refs.as_ptr() as usize);
     let tasks: Vec<Mutex<Option<Task>>> = tasks.into_iter().map(|t| Mutex::new(Some(t))).collect();
     let next = AtomicUsize::new(0);
     let placing = Mutex::new(Placing {
+        ends,
+        released,
         next: 0,
         cursor: start,
         done: Vec::new(),
@@ -443,11 +461,16 @@ fn subtrees<K: Kind>(
             let mut open = Vec::new();
             let root = Collapse::new(nodes, merge_weight).subtree(0, &mut wide, &mut open);
             debug_assert!(open.is_empty(), "no stubs below the top");
-            let ready = {
+            let (ready, release) = {
                 let mut p = placing.lock().unwrap();
                 p.done.push((j, wide, root));
                 p.ready(end)
             };
+            if let Some((start, len)) = release {
+                // SAFETY: these references belong to subtrees that are built (their tasks,
+                // which held them, dropped), and nobody reads them again.
+                unsafe { huge_pages::release(start, len) };
+            }
             for (base, wide) in ready {
                 for (k, node) in wide.iter().enumerate() {
                     // SAFETY: `ready` gave this subtree the places base..base + len,
