@@ -13,9 +13,11 @@
 //! into its own part of the final order. Large nodes choose their split from a fixed sample
 //! of their primitives; small ones find the exact SAH split over lists sorted once per axis
 //! ([`sweep`]). Inputs of [`CLUSTER_MIN`] primitives or more are built over clusters of
-//! neighbours, each cluster's own tree below it ([`cluster`]), with no gaps in the node
-//! array and no array of the primitives' references (see [`build`]). The result depends
-//! only on the input, never on the thread count.
+//! neighbours, each cluster's own tree below it ([`cluster`]), with no array of the
+//! primitives' references (see [`build`]), and in two stages so that the binary tree never
+//! exists whole: its top, collapsed at once, then each subtree below it built and collapsed
+//! by one thread while its nodes are in the cache ([`fused`]). The result depends only on
+//! the input, never on the thread count.
 
 use super::{BuildTimes, WideBvh};
 use crate::geometry::Aabb;

@@ -18,8 +18,9 @@
 //!
 //! Memory: at 10 M triangles the build's arrays are a large share of its time on hosts that
 //! charge for memory a process touches first (docs/performance.md, "Fresh memory on this
-//! VM"), so it keeps few: the sorted keys (8 bytes a primitive, whose low halves name the
-//! primitives in curve order), the clusters' references, the nodes and the order. A
+//! VM"), so it keeps few: the primitives in curve order (4 bytes each, the low halves of
+//! the sorted keys, kept in half of the sort's own buffer), the clusters' references, the
+//! wide nodes and the order; the binary tree never exists whole ([`fused`]). A
 //! primitive's bounds are asked of the caller again where they are needed (for its key,
 //! when the clusters form, and when its cluster's tree is built) instead of being stored and
 //! gathered along the curve (64 bytes a primitive); each cluster's tree is built once when
