@@ -323,7 +323,7 @@ pub struct Pcg32 {
     inc: u64,
 }
 
-const PCG_MULT: u64 = 6_364_136_223_846_793_005;
+pub(crate) const PCG_MULT: u64 = 6_364_136_223_846_793_005;
 
 impl Pcg32 {
     #[inline]

@@ -5,8 +5,10 @@
 //! black bodies; rays that leave the scene; samples that overflow; both kinds of planar
 //! light; both roulettes; every path length), on odd image sizes, crops and split passes.
 //!
-//! On a CPU without AVX-512 the wavefront never runs and there is nothing to compare; the
-//! tests say so and pass. (The wavefront is x86-64 code; elsewhere there is nothing here.)
+//! Both of its backends are compared where the CPU has them: AVX-512, and AVX2 (which a CPU
+//! with AVX-512 runs when the scene asks, `Scene::without_avx512_wavefront`). On a CPU
+//! without AVX2 and BMI2 the wavefront never runs and there is nothing to compare; the tests
+//! say so and pass. (The wavefront is x86-64 code; elsewhere there is nothing here.)
 #![cfg(target_arch = "x86_64")]
 
 use mcrt::film::Film;
@@ -17,15 +19,19 @@ use mcrt::scene::Scene;
 use std::path::Path;
 
 fn cpu_runs_it() -> bool {
-    let ok = std::arch::is_x86_feature_detected!("avx512f")
-        && std::arch::is_x86_feature_detected!("avx512dq")
-        && std::arch::is_x86_feature_detected!("bmi2");
+    let ok =
+        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("bmi2");
     if !ok {
-        eprintln!(
-            "this CPU lacks AVX-512F/DQ or BMI2: the wavefront never runs, nothing to compare"
-        );
+        eprintln!("this CPU lacks AVX2 or BMI2: the wavefront never runs, nothing to compare");
     }
     ok
+}
+
+/// Whether the CPU runs the AVX-512 backend, so that the AVX2 one is compared as well.
+fn cpu_has_avx512() -> bool {
+    std::arch::is_x86_feature_detected!("avx512f")
+        && std::arch::is_x86_feature_detected!("avx512dq")
+        && std::arch::is_x86_feature_detected!("bmi2")
 }
 
 fn scene_from(text: &str) -> Scene {
@@ -54,14 +60,40 @@ fn settings(scene: &Scene, over: FileSettings) -> RenderSettings {
 /// Renders `scene` with `s` both ways and compares everything the film and the statistics
 /// hold. `scene` must be one the wavefront takes.
 fn same_both_ways(scene: Scene, s: &RenderSettings, what: &str) -> (Film, RenderStats) {
+    if s.params.shadow_rays > 1 && !cpu_has_avx512() {
+        eprintln!("{what}: several shadow rays a vertex take the wavefront only with AVX-512");
+        assert!(Wavefront::new(&scene, s).is_none(), "{what}: AVX2 declines");
+        return render(&scene, s, &|_| {}).unwrap();
+    }
     assert!(
         Wavefront::new(&scene, s).is_some(),
         "{what}: the wavefront does not take this scene, so the test would compare nothing"
     );
     let (wide, ws) = render(&scene, s, &|_| {}).unwrap();
+    let scene = if cpu_has_avx512() {
+        // The AVX2 backend too, against the same film.
+        let scene = scene.without_avx512_wavefront();
+        let (narrow, ns) = render(&scene, s, &|_| {}).unwrap();
+        same_film(
+            &narrow,
+            &ns,
+            &wide,
+            &ws,
+            &format!("{what}, AVX2 against AVX-512"),
+        );
+        scene
+    } else {
+        scene
+    };
     let scalar = scene.without_wavefront();
     assert!(Wavefront::new(&scalar, s).is_none());
     let (one, os) = render(&scalar, s, &|_| {}).unwrap();
+    same_film(&wide, &ws, &one, &os, what);
+    (wide, ws)
+}
+
+/// Asserts that two renders' films and statistics hold the same.
+fn same_film(wide: &Film, ws: &RenderStats, one: &Film, os: &RenderStats, what: &str) {
     assert_eq!(wide.count, one.count, "{what}: sample counts");
     let differ = wide
         .sum
@@ -81,7 +113,6 @@ fn same_both_ways(scene: Scene, s: &RenderSettings, what: &str) -> (Film, Render
         (os.dropped, os.first_dropped),
         "{what}: dropped samples"
     );
-    (wide, ws)
 }
 
 /// The Cornell box (one-sided Lambertian walls, a white parallelogram light that reflects

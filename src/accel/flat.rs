@@ -30,10 +30,12 @@ use std::arch::x86_64::*;
 /// faster than the BVH at every size up to this one (docs/performance.md).
 pub const FLAT_MAX_TRIANGLES: usize = 64;
 /// Most triangles traced by brute force with AVX only (two passes of eight lanes a block).
-/// In `cargo bench --bench flat` it beat the BVH by 10 % on the Cornell box's 36 triangles
-/// and by 26 % on the TNCG15 room's 26, but renders of the Cornell box were no faster
-/// (docs/performance.md).
-pub const FLAT_MAX_TRIANGLES_AVX: usize = 32;
+/// In `cargo bench --bench flat` it beat the BVH at every size measured: by 10 % on the
+/// Cornell box's 36 triangles, 26 % on the TNCG15 room's 26 and 19 % on 52 random ones
+/// (docs/performance.md). It was 32 until the wavefront ran on AVX2 (2026-12-03): the
+/// wavefront takes only scenes traced by brute force (so that its hits are the path
+/// tracer's), and the Cornell box has 36.
+pub const FLAT_MAX_TRIANGLES_AVX: usize = 64;
 /// Most triangles a flat set can hold: the lanes near an edge are gathered in one 64-bit mask.
 pub const FLAT_MAX_SLOTS: usize = 64;
 /// Most spheres traced by brute force (each costs a test of its own for every ray).

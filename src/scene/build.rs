@@ -216,6 +216,7 @@ impl Scene {
             cameras: desc.cameras,
             desc_settings: desc.settings,
             wavefront_allowed: true,
+            wavefront_avx512: true,
         }
     }
 }

@@ -1,4 +1,4 @@
-//! The path tracer sixteen paths at a time, for small scenes on CPUs with AVX-512.
+//! The path tracer sixteen paths at a time, for small scenes on CPUs with AVX-512 or AVX2.
 //!
 //! [`super::path::li`] follows one path at a time: its arithmetic on three-component vectors
 //! fills three lanes of a four-lane register, its branches (which material, whether the
@@ -29,15 +29,17 @@
 //! (`accel::flat`: at most 64 triangles and 4 spheres); every material Lambertian (one- or
 //! two-sided, untextured), a mirror (untextured), smooth glass or black; no vertex normals;
 //! one light, a triangle or a parallelogram; the `path` integrator, any number of shadow
-//! rays, either sampler. The Cornell box and the TNCG15 room are such scenes. Any other
-//! scene, and any CPU without AVX-512F, AVX-512DQ and BMI2, renders with `path::li`.
+//! rays (one only with AVX2), either sampler. The Cornell box and the TNCG15 room are such
+//! scenes. Any other scene, and any CPU without AVX2 and BMI2, renders with `path::li`.
+//!
+//! The lanes' code is written once over a small SIMD type of sixteen lanes and compiled
+//! twice ([`Backend`]): in one AVX-512 register ([`avx512`]) and in two AVX2 registers
+//! ([`avx2`], for CPUs without AVX-512, where Mitsuba's `llvm` variants run eight lanes
+//! wide too). Both compute every lane's IEEE operations in the scalar code's order, so the
+//! same bits.
 
-mod bsdf;
-mod nee;
-mod path;
-mod rng;
-mod simd;
-mod trace;
+mod avx2;
+mod avx512;
 
 use crate::camera::Camera;
 use crate::film::PixelSums;
@@ -46,9 +48,6 @@ use crate::material::Bsdf;
 use crate::render::{RenderSettings, RenderStats, TilePixel};
 use crate::sampler::SamplerKind;
 use crate::scene::{Scene, META_EMITTER, META_MATERIAL, SPHERE};
-use rng::{LaneSampler, Pcg16, Samplers16};
-use simd::{F, M, U, V3};
-use trace::{Ball, Tri};
 
 /// Most primitives the wavefront traces (by brute force, as `accel::flat` does).
 pub const MAX_PRIMS: usize = 64;
@@ -89,6 +88,53 @@ pub struct Wavefront<'a> {
     sampler: SamplerKind,
     seed: u64,
     width: u32,
+    backend: Backend,
+}
+
+/// The instruction set the lanes run on: sixteen lanes in one AVX-512 register, or in two
+/// AVX2 registers (the same arithmetic, lane for lane, so the same bits).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Backend {
+    Avx512,
+    Avx2,
+}
+
+impl Backend {
+    /// The best this CPU runs, if any (AVX-512 only if `avx512`).
+    fn detect(avx512: bool) -> Option<Backend> {
+        if avx512
+            && std::arch::is_x86_feature_detected!("avx512f")
+            && std::arch::is_x86_feature_detected!("avx512dq")
+            && std::arch::is_x86_feature_detected!("bmi2")
+        {
+            Some(Backend::Avx512)
+        } else if std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("bmi2")
+        {
+            Some(Backend::Avx2)
+        } else {
+            None
+        }
+    }
+}
+
+/// A triangle's first vertex and edges `p1 − p0`, `p2 − p0` (as `Triangle::intersect`
+/// subtracts them), and its primitive index.
+#[derive(Clone, Copy, Debug)]
+pub struct Tri {
+    pub p0: [f32; 3],
+    pub e1: [f32; 3],
+    pub e2: [f32; 3],
+    pub prim: u32,
+}
+
+/// A sphere: its centre, its radius squared (as `Sphere::intersect` computes it) and its
+/// primitive index.
+#[derive(Clone, Copy, Debug)]
+pub struct Ball {
+    pub center: [f32; 3],
+    pub r2: f32,
+    pub prim: u32,
 }
 
 /// The scene's one light, as `Lights::sample`, `Lights::pdf` and the planar batch read it.
@@ -112,13 +158,21 @@ impl<'a> Wavefront<'a> {
     /// The wavefront for rendering `scene` with `s`, if the scene, the settings and the CPU
     /// are ones it takes (see the module comment); None otherwise.
     pub fn new(scene: &'a Scene, s: &RenderSettings) -> Option<Wavefront<'a>> {
-        if !scene.wavefront_allowed || !cpu_has_it() {
+        if !scene.wavefront_allowed {
             return None;
         }
+        let backend = Backend::detect(scene.wavefront_avx512)?;
         let p = &s.params;
         // (No shadow ray at all is refused by the settings; through the library it would
         // make `sample_lights` divide by zero, which the lanes do not copy.)
         if p.kind != IntegratorKind::Path || p.max_depth == Some(0) || p.shadow_rays == 0 {
+            return None;
+        }
+        // Several light samples a vertex are traced as each lane's packets, one group at a
+        // time: with AVX2 that was slower than one path at a time (`cargo bench --bench
+        // wavefront`, Figure 3.3 at 250²: 0.48 s against 0.44 s, one thread), so it is left
+        // to the path tracer there.
+        if backend == Backend::Avx2 && p.shadow_rays > 1 {
             return None;
         }
         // The path tracer traces single rays by brute force exactly where the scene has a
@@ -160,6 +214,7 @@ impl<'a> Wavefront<'a> {
             sampler: s.sampler,
             seed: s.seed,
             width: s.width,
+            backend,
         };
         for (j, &idx) in scene.tris.iter().enumerate() {
             let meta = scene.meta[j];
@@ -236,186 +291,12 @@ impl<'a> Wavefront<'a> {
         stats: &mut RenderStats,
     ) {
         assert_eq!(pixels.len(), sums.len());
-        // SAFETY: `new` checked that the CPU has AVX-512F, AVX-512DQ and BMI2.
+        // SAFETY: `new` found the backend's features on this CPU.
         unsafe {
-            match self.sampler {
-                SamplerKind::Independent => self.run(Pcg16::new(), camera, pixels, sums, stats),
-                _ => self.run(Samplers16::new(), camera, pixels, sums, stats),
+            match self.backend {
+                Backend::Avx512 => avx512::Wavefront(self).render(camera, pixels, sums, stats),
+                Backend::Avx2 => avx2::Wavefront(self).render(camera, pixels, sums, stats),
             }
         }
-    }
-}
-
-/// Whether this CPU runs the wavefront's code.
-fn cpu_has_it() -> bool {
-    std::arch::is_x86_feature_detected!("avx512f")
-        && std::arch::is_x86_feature_detected!("avx512dq")
-        && std::arch::is_x86_feature_detected!("bmi2")
-}
-
-/// The state of the sixteen paths, a lane each, between steps.
-struct Lanes<S> {
-    o: [[f32; 16]; 3],
-    d: [[f32; 16]; 3],
-    beta: [[f32; 16]; 3],
-    l: [[f32; 16]; 3],
-    /// η² accumulated over refractions (for the roulette).
-    eta2: [f32; 16],
-    prev_p: [[f32; 16]; 3],
-    prev_pdf: [f32; 16],
-    depth: [u32; 16],
-    /// The tile pixel (index into `pixels`) of each lane's sample.
-    pixel: [u32; 16],
-    rng: S,
-    /// Lanes holding a path.
-    active: M,
-    /// Lanes whose path got to its vertex by a non-specular BSDF sample (for MIS on
-    /// emitter hits).
-    has_prev: M,
-    /// Lanes whose path ended at the last step, their samples not yet on the film.
-    done: M,
-    /// The shadow rays of the last step's light samples, waiting to be traced.
-    shadow: Shadows,
-}
-
-/// A group's shadow rays between `front` and `back` (one light sample a vertex).
-struct Shadows {
-    /// The lanes that sampled the light, those whose sample needs a shadow ray, and of
-    /// those the ones blocked (set by `shadows`).
-    nee: M,
-    lanes: M,
-    blocked: M,
-    o: [[f32; 16]; 3],
-    d: [[f32; 16]; 3],
-    /// What `l += β·lit` adds: β times the contribution where the ray is clear, β·0 where
-    /// it is blocked or there is no ray.
-    lit: [[f32; 16]; 3],
-    dark: [[f32; 16]; 3],
-}
-
-/// Groups of sixteen lanes a tile keeps in flight. Each group's light samples leave shadow
-/// rays in about half its lanes (the others' paths end, or their sample lies behind the
-/// surface: 58 % of them carry one in the Cornell box), so each group alone would trace
-/// vectors half full; four groups' rays pack into about three. Measured on the Cornell box
-/// (256², 64 spp, one thread, three rounds alternating): 1.45–1.72 s against 1.59–1.85 s
-/// for one group; two groups were no faster, six or eight no faster than four.
-const GROUPS: usize = 4;
-
-impl Wavefront<'_> {
-    #[target_feature(enable = "avx512f,avx512dq,bmi2")]
-    unsafe fn run<S: LaneSampler + Clone>(
-        &self,
-        rng: S,
-        camera: &Camera,
-        pixels: &[TilePixel],
-        sums: &mut [PixelSums],
-        stats: &mut RenderStats,
-    ) {
-        let lanes = || Lanes {
-            o: [[0.0; 16]; 3],
-            d: [[0.0; 16]; 3],
-            beta: [[0.0; 16]; 3],
-            l: [[0.0; 16]; 3],
-            eta2: [1.0; 16],
-            prev_p: [[0.0; 16]; 3],
-            prev_pdf: [0.0; 16],
-            depth: [0; 16],
-            pixel: [0; 16],
-            rng: rng.clone(),
-            active: 0,
-            has_prev: 0,
-            done: 0,
-            shadow: Shadows {
-                nee: 0,
-                lanes: 0,
-                blocked: 0,
-                o: [[0.0; 16]; 3],
-                d: [[0.0; 16]; 3],
-                lit: [[0.0; 16]; 3],
-                dark: [[0.0; 16]; 3],
-            },
-        };
-        let mut all: [Lanes<S>; GROUPS] = std::array::from_fn(|_| lanes());
-        // Several light samples a vertex are traced as each lane's packets, in `front`:
-        // nothing to pool, so one group.
-        let groups = if self.shadow_rays == 1 {
-            &mut all[..]
-        } else {
-            &mut all[..1]
-        };
-        // The next camera sample: pixel k, sample i.
-        let (mut k, mut i) = (0usize, pixels.first().map_or(0, |p| p.samples.0));
-        let (mut px, mut py) = ([0f32; 16], [0f32; 16]);
-        loop {
-            let mut busy = false;
-            for st in groups.iter_mut() {
-                // Free lanes take the next samples.
-                let mut fresh: M = 0;
-                let mut free = !st.active;
-                while free != 0 {
-                    while k < pixels.len() && i >= pixels[k].samples.1 {
-                        k += 1;
-                        i = pixels.get(k).map_or(0, |p| p.samples.0);
-                    }
-                    if k == pixels.len() {
-                        break;
-                    }
-                    let l = free.trailing_zeros() as usize;
-                    free &= free - 1;
-                    let pix = &pixels[k];
-                    let pixel = pix.gy as u64 * self.width as u64 + pix.gx as u64;
-                    st.rng.start(l, self.sampler, self.seed, pixel, i as u64);
-                    st.pixel[l] = k as u32;
-                    (px[l], py[l]) = (pix.gx as f32, pix.gy as f32);
-                    fresh |= 1 << l;
-                    i += 1;
-                }
-                if fresh != 0 {
-                    self.start(camera, st, fresh, &px, &py);
-                }
-                if st.active != 0 {
-                    self.front(st, stats);
-                    busy = true;
-                }
-            }
-            if !busy {
-                break;
-            }
-            self.shadows(groups);
-            for st in groups.iter_mut() {
-                self.back(st, pixels, sums, stats);
-            }
-        }
-    }
-
-    /// Camera rays for the lanes of `fresh` (`Camera::generate_ray` with the sample's first
-    /// request), and their paths' initial state.
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512dq")]
-    unsafe fn start<S: LaneSampler + Clone>(
-        &self,
-        cam: &Camera,
-        st: &mut Lanes<S>,
-        fresh: M,
-        px: &[f32; 16],
-        py: &[f32; 16],
-    ) {
-        let [ux, uy] = st.rng.next::<2>(fresh);
-        let s = (F::load(px) + ux) / F::splat(cam.width as f32);
-        let t = (F::load(py) + uy) / F::splat(cam.height as f32);
-        let v = |a: glam::Vec3A| V3::splat(a.into());
-        let p = ((v(cam.tl) + v(cam.right).scale(s)) + v(cam.down).scale(t))
-            + v(cam.twist).scale(s * t);
-        let eye = v(cam.eye);
-        let d = (p - eye).normalize();
-        let keep = |a: &mut [[f32; 16]; 3], x: V3| V3::select(fresh, x, V3::load(a)).store(a);
-        keep(&mut st.o, eye);
-        keep(&mut st.d, d);
-        keep(&mut st.beta, V3::splat([1.0; 3]));
-        keep(&mut st.l, V3::zero());
-        F::select(fresh, F::splat(1.0), F::load(&st.eta2)).store(&mut st.eta2);
-        U::select(fresh, U::splat(0), U::load(&st.depth)).store(&mut st.depth);
-        st.has_prev &= !fresh;
-        st.active |= fresh;
     }
 }

@@ -54,14 +54,14 @@ impl Wavefront<'_> {
         )
     }
 
+    // (The target features are repeated so that the closures inside get them too.)
+    lanes_fn! {
     /// The first half of a step of every active path of a group: a vertex, as one pass of
     /// `path::li`'s loop, but for the one shadow ray of its light sample, which is left in
     /// `st.shadow` for [`Self::shadows`] to trace with the other groups' (several light
     /// samples a vertex are traced here, each lane's as packets), and the samples of the
     /// paths that end, which [`Self::back`] adds to the film once the shadow rays are in.
-    // (The target features are repeated so that the closures inside get them too.)
     #[inline]
-    #[target_feature(enable = "avx512f,avx512dq")]
     pub(super) unsafe fn front<S: LaneSampler>(&self, st: &mut Lanes<S>, stats: &mut RenderStats) {
         let active = st.active;
         let (zero, one) = (F::zero(), F::splat(1.0));
@@ -209,13 +209,14 @@ impl Wavefront<'_> {
         st.active = alive;
         st.done = done;
     }
+    }
 
+    lanes_fn! {
     /// The second half of a group's step, once `shadows` has traced its shadow rays: the
     /// light samples' values added (`l += β·lit`, after the vertex's emission and before
     /// the next vertex's, as `path::li` adds them), and the samples of the paths that ended
     /// added to the film.
     #[inline]
-    #[target_feature(enable = "avx512f,avx512dq")]
     pub(super) unsafe fn back<S: LaneSampler>(
         &self,
         st: &mut Lanes<S>,
@@ -258,15 +259,16 @@ impl Wavefront<'_> {
         }
         st.done = 0;
     }
+    }
 
+    lanes_fn! {
     /// The shadow rays `front` left in the groups, traced together: packed sixteen to a
     /// vector (where each group alone fills about half of one), each against every
     /// primitive (`Scene::occluded`'s answers), the answers unpacked into each group's
     /// `blocked` lanes.
     #[inline]
-    #[target_feature(enable = "avx512f,avx512dq,bmi2")]
     pub(super) unsafe fn shadows<S: LaneSampler>(&self, groups: &mut [Lanes<S>]) {
-        use std::arch::x86_64::{_mm512_maskz_compress_ps, _mm512_storeu_ps, _pdep_u64};
+        use std::arch::x86_64::_pdep_u64;
         // The rays, packed: origin and direction by axis. Room for every group's sixteen.
         const ROOM: usize = 16 * GROUPS;
         let mut o = [[0f32; ROOM + 16]; 3];
@@ -277,16 +279,11 @@ impl Wavefront<'_> {
             if sh.lanes == 0 {
                 continue;
             }
+            // The lanes past the packed ones are overwritten by the next group's, or never
+            // read.
             for axis in 0..3 {
-                // Compressed in a register and stored whole (the store to memory that
-                // compresses is microcoded and slow on AMD's Zen 4); the lanes past the
-                // packed ones are overwritten by the next group's, or never read.
-                let pack = |dst: &mut [f32; ROOM + 16], src: &[f32; 16]| {
-                    let packed = _mm512_maskz_compress_ps(sh.lanes, F::load(src).0);
-                    _mm512_storeu_ps(dst.as_mut_ptr().add(n), packed)
-                };
-                pack(&mut o[axis], &sh.o[axis]);
-                pack(&mut d[axis], &sh.d[axis]);
+                F::load(&sh.o[axis]).compress_to(sh.lanes, &mut o[axis], n);
+                F::load(&sh.d[axis]).compress_to(sh.lanes, &mut d[axis], n);
             }
             n += sh.lanes.count_ones() as usize;
         }
@@ -299,15 +296,10 @@ impl Wavefront<'_> {
             } else {
                 (1 << (n - first)) - 1
             };
-            let v = |a: &[[f32; ROOM + 16]; 3]| {
-                let at = |x: &[f32; ROOM + 16]| {
-                    F(std::arch::x86_64::_mm512_loadu_ps(x.as_ptr().add(first)))
-                };
-                V3 {
-                    x: at(&a[0]),
-                    y: at(&a[1]),
-                    z: at(&a[2]),
-                }
+            let v = |a: &[[f32; ROOM + 16]; 3]| V3 {
+                x: F::load_at(&a[0], first),
+                y: F::load_at(&a[1], first),
+                z: F::load_at(&a[2], first),
             };
             let b = trace::occluded(
                 self.scene,
@@ -326,5 +318,6 @@ impl Wavefront<'_> {
             sh.blocked = _pdep_u64(blocked >> at, sh.lanes as u64) as M;
             at += sh.lanes.count_ones();
         }
+    }
     }
 }

@@ -4,12 +4,13 @@
 //! path computes for its path.
 //!
 //! The operator impls and methods are `#[inline(always)]` functions without target features
-//! that call the intrinsics; inlined into the wavefront's `#[target_feature(enable =
-//! "avx512f")]` functions, they become single instructions. They are safe functions that
-//! run AVX-512 instructions, which is sound only because nothing outside this private
-//! module tree calls them: every value of these types, and every call of the wavefront's
-//! helpers built on them (`bsdf`, `nee`, `path`), is made inside such a function, which
-//! runs only where `Wavefront::new` found the features.
+//! that call the intrinsics (directly: a closure would be compiled without the caller's
+//! features); inlined into the wavefront's functions compiled for AVX-512 (`lanes_fn!` in
+//! `avx512.rs`), they become single instructions. They are safe functions that run AVX-512
+//! instructions, which is sound only because nothing outside this private module tree calls
+//! them: every value of these types, and every call of the wavefront's helpers built on
+//! them (`bsdf`, `nee`, `path`), is made inside such a function, which runs only where
+//! `Backend::detect` found the features. `simd_avx2.rs` is the same interface on AVX2.
 
 use std::arch::x86_64::*;
 use std::ops::{Add, BitAnd, Div, Mul, Neg, Sub};
@@ -146,6 +147,20 @@ impl F {
             )))
         }
     }
+    /// `a[at..at + 16]`.
+    #[inline(always)]
+    pub fn load_at(a: &[f32], at: usize) -> F {
+        assert!(at + 16 <= a.len());
+        F(unsafe { _mm512_loadu_ps(a.as_ptr().add(at)) })
+    }
+    /// The lanes of `m`, in order, written to `a[at..]`; the rest of `a[at..at + 16]` is
+    /// overwritten with zeros. (Compressed in a register and stored whole: the store to
+    /// memory that compresses is microcoded and slow on AMD's Zen 4.)
+    #[inline(always)]
+    pub fn compress_to(self, m: M, a: &mut [f32], at: usize) {
+        assert!(at + 16 <= a.len());
+        unsafe { _mm512_storeu_ps(a.as_mut_ptr().add(at), _mm512_maskz_compress_ps(m, self.0)) }
+    }
     /// Lane i of `table` for the index in lane i (below 64), by two two-register
     /// permutations and a blend on the index's bit 5.
     #[inline(always)]
@@ -260,6 +275,11 @@ impl U {
         // SAFETY: the same bits through the float permutation.
         let t: &[f32; 64] = unsafe { &*(table as *const [u32; 64] as *const [f32; 64]) };
         U(unsafe { _mm512_castps_si512(F::lookup64(t, idx).0) })
+    }
+    /// Each lane shifted right by `K` bits.
+    #[inline(always)]
+    pub fn shr<const K: u32>(self) -> U {
+        U(unsafe { _mm512_srli_epi32::<K>(self.0) })
     }
     /// The lanes as f32 (exact below 2^24).
     #[inline(always)]
@@ -419,5 +439,36 @@ impl Neg for V3 {
     #[inline(always)]
     fn neg(self) -> V3 {
         self.map(F::neg)
+    }
+}
+
+/// The next output of sixteen PCG32 streams ([`crate::sampler::Pcg32`]), of each lane in
+/// `m`; the other lanes' streams do not move. The 64-bit states in two registers of eight
+/// lanes (AVX-512DQ's 64-bit multiply), the 32-bit outputs gathered into one of sixteen.
+#[inline(always)]
+pub fn pcg32(state: &mut [u64; 16], inc: &[u64; 16], m: M) -> U {
+    unsafe {
+        let mult = _mm512_set1_epi64(crate::sampler::PCG_MULT as i64);
+        let mut out = [_mm256_setzero_si256(); 2];
+        for (half, out) in out.iter_mut().enumerate() {
+            let at = 8 * half;
+            let old = _mm512_loadu_si512(state.as_ptr().add(at) as *const _);
+            let inc = _mm512_loadu_si512(inc.as_ptr().add(at) as *const _);
+            let new = _mm512_add_epi64(_mm512_mullo_epi64(old, mult), inc);
+            let lanes = (m >> at) as u8;
+            _mm512_mask_storeu_epi64(state.as_mut_ptr().add(at) as *mut _, lanes, new);
+            // ((old >> 18) ^ old) >> 27, truncated, rotated right by old >> 59.
+            let xorshifted =
+                _mm512_srli_epi64::<27>(_mm512_xor_si512(_mm512_srli_epi64::<18>(old), old));
+            let rot = _mm512_srli_epi64::<59>(old);
+            // Rotating each 32-bit half of the 64-bit lanes rotates the low one, which is
+            // the truncated value, by `rot` (the high one by 0); then keep the low halves.
+            let r = _mm512_rorv_epi32(xorshifted, rot);
+            *out = _mm512_cvtepi64_epi32(r);
+        }
+        U(_mm512_inserti64x4::<1>(
+            _mm512_castsi256_si512(out[0]),
+            out[1],
+        ))
     }
 }

@@ -15,30 +15,12 @@
 //! [`Sphere::intersect`]: crate::geometry::Sphere::intersect
 
 use super::simd::{F, M, U, V3};
+use super::{Ball, Tri};
 use crate::geometry::Ray;
 use crate::scene::Scene;
 
 /// Barycentric margin of the fast path, as in `Triangle::intersect`.
 const EDGE_EPS: f32 = 1e-4;
-
-/// A triangle's first vertex and edges `p1 − p0`, `p2 − p0` (as `Triangle::intersect`
-/// subtracts them), and its primitive index.
-#[derive(Clone, Copy, Debug)]
-pub struct Tri {
-    pub p0: [f32; 3],
-    pub e1: [f32; 3],
-    pub e2: [f32; 3],
-    pub prim: u32,
-}
-
-/// A sphere: its centre, its radius squared (as `Sphere::intersect` computes it) and its
-/// primitive index.
-#[derive(Clone, Copy, Debug)]
-pub struct Ball {
-    pub center: [f32; 3],
-    pub r2: f32,
-    pub prim: u32,
-}
 
 /// The rays' nearest hits: the lanes hit, those whose hit is a sphere, the primitive hit,
 /// and t, u and v (a sphere's u and v are 0).
@@ -119,12 +101,12 @@ fn ray_of(o: &[[f32; 16]; 3], d: &[[f32; 16]; 3], l: usize) -> Ray {
     )
 }
 
+lanes_fn! {
 /// The nearest hits of the rays in lanes `active` (no bound, as `Scene::intersect`).
 ///
 /// # Safety
 /// The CPU must have AVX-512F.
 #[inline]
-#[target_feature(enable = "avx512f")]
 pub unsafe fn closest(
     scene: &Scene,
     tris: &[Tri],
@@ -192,12 +174,13 @@ pub unsafe fn closest(
         v: F::select(tri, bv, zero),
     }
 }
+}
 
+lanes_fn! {
 /// The pairs near an edge, decided by the scene's test before the lane's `bound` and kept
 /// where nearer than the lane's triangle hit (or as near and of a lower primitive).
 #[cold]
 #[inline(never)]
-#[target_feature(enable = "avx512f")]
 unsafe fn settle(
     scene: &Scene,
     tris: &[Tri],
@@ -234,13 +217,14 @@ unsafe fn settle(
     *v = F::load(&va);
     *prim = U::load(&pa);
 }
+}
 
+lanes_fn! {
 /// The lanes of `active` whose rays are blocked before `t_max` (`Scene::occluded`).
 ///
 /// # Safety
 /// The CPU must have AVX-512F.
 #[inline]
-#[target_feature(enable = "avx512f")]
 pub unsafe fn occluded(
     scene: &Scene,
     tris: &[Tri],
@@ -270,11 +254,12 @@ pub unsafe fn occluded(
     }
     blocked
 }
+}
 
+lanes_fn! {
 /// The lanes, not yet `blocked`, that a pair near an edge blocks by the scene's test.
 #[cold]
 #[inline(never)]
-#[target_feature(enable = "avx512f")]
 unsafe fn settle_occluded(
     scene: &Scene,
     tris: &[Tri],
@@ -305,4 +290,5 @@ unsafe fn settle_occluded(
         }
     }
     more
+}
 }

@@ -1,0 +1,511 @@
+//! Sixteen f32 lanes in two AVX2 registers (lanes 0–7 in the first, 8–15 in the second),
+//! with the same operations as the AVX-512 backend (`simd.rs`), for CPUs without AVX-512:
+//! each the IEEE operation the scalar code performs on one lane (no FMA, no reciprocal
+//! approximations), so a lane computes the same bits on either backend. Lane masks are the
+//! same sixteen bits; where an operation takes one, it is widened to a vector mask.
+//!
+//! As in `simd.rs`, these are `#[inline(always)]` safe functions that run AVX2
+//! instructions, sound only because nothing outside this private module tree calls them:
+//! every call is made inside a function compiled for AVX2 (`lanes_fn!` in `avx2.rs`), which
+//! runs only where `Backend::detect` found the features.
+
+use std::arch::x86_64::*;
+use std::ops::{Add, BitAnd, Div, Mul, Neg, Sub};
+
+/// A mask of lanes, bit i for lane i.
+pub type M = u16;
+
+/// Sixteen f32 lanes.
+#[derive(Clone, Copy)]
+pub struct F(pub [__m256; 2]);
+
+/// Sixteen u32 lanes.
+#[derive(Clone, Copy)]
+pub struct U(pub [__m256i; 2]);
+
+// SAFETY (all the `unsafe` blocks of this module): the intrinsics need AVX2, which every
+// caller has checked for (see the module comment); they touch no memory but the arrays
+// they are given.
+
+/// `[e with h = 0, e with h = 1]`: each half's result, written out rather than through a
+/// closure, which would be compiled without the caller's target features and so call the
+/// intrinsics rather than inline them.
+macro_rules! both {
+    ($h:ident => $e:expr) => {
+        [
+            {
+                let $h = 0usize;
+                $e
+            },
+            {
+                let $h = 1usize;
+                $e
+            },
+        ]
+    };
+}
+
+/// The sixteen-bit mask of two halves' comparison results (all ones or all zeros a lane).
+#[inline(always)]
+fn mask_of(c: [__m256; 2]) -> M {
+    unsafe { (_mm256_movemask_ps(c[0]) as u32 | (_mm256_movemask_ps(c[1]) as u32) << 8) as M }
+}
+
+/// The vector mask of half `h` of `m`: all ones in the lanes whose bit is set.
+#[inline(always)]
+fn lanes_of(m: M, h: usize) -> __m256i {
+    unsafe {
+        let bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+        let b = _mm256_set1_epi32(((m >> (8 * h)) & 0xff) as i32);
+        _mm256_cmpeq_epi32(_mm256_and_si256(b, bits), bits)
+    }
+}
+
+impl F {
+    #[inline(always)]
+    pub fn splat(x: f32) -> F {
+        F([unsafe { _mm256_set1_ps(x) }; 2])
+    }
+    #[inline(always)]
+    pub fn zero() -> F {
+        F([unsafe { _mm256_setzero_ps() }; 2])
+    }
+    #[inline(always)]
+    pub fn load(a: &[f32; 16]) -> F {
+        F(both!(h => unsafe { _mm256_loadu_ps(a.as_ptr().add(8 * h)) }))
+    }
+    #[inline(always)]
+    pub fn store(self, a: &mut [f32; 16]) {
+        unsafe {
+            _mm256_storeu_ps(a.as_mut_ptr(), self.0[0]);
+            _mm256_storeu_ps(a.as_mut_ptr().add(8), self.0[1]);
+        }
+    }
+    #[inline(always)]
+    pub fn to_array(self) -> [f32; 16] {
+        let mut a = [0.0; 16];
+        self.store(&mut a);
+        a
+    }
+    #[inline(always)]
+    pub fn sqrt(self) -> F {
+        F(both!(h => unsafe { _mm256_sqrt_ps(self.0[h]) }))
+    }
+    /// |x|: the sign bit cleared, as `f32::abs` and glam's `abs`.
+    #[inline(always)]
+    pub fn abs(self) -> F {
+        F(both!(h => unsafe {
+            _mm256_and_ps(self.0[h], _mm256_castsi256_ps(_mm256_set1_epi32(0x7fff_ffff)))
+        }))
+    }
+    /// `f32::max` against a number `o` that is not NaN: `o` where `self` is NaN (x86's
+    /// `maxps` gives its second operand where either is NaN).
+    #[inline(always)]
+    pub fn max_num(self, o: F) -> F {
+        F(both!(h => unsafe { _mm256_max_ps(self.0[h], o.0[h]) }))
+    }
+    /// `f32::min` against a number `o` that is not NaN: `o` where `self` is NaN.
+    #[inline(always)]
+    pub fn min_num(self, o: F) -> F {
+        F(both!(h => unsafe { _mm256_min_ps(self.0[h], o.0[h]) }))
+    }
+    /// `f32::max` of two numbers either of which may be NaN: the other where one is.
+    #[inline(always)]
+    pub fn max_num2(self, o: F) -> F {
+        // maxps(o, self) is self where either is NaN; where self is, o.
+        let m = F(both!(h => unsafe { _mm256_max_ps(o.0[h], self.0[h]) }));
+        F::select(self.is_nan(), o, m)
+    }
+    #[inline(always)]
+    pub fn is_nan(self) -> M {
+        mask_of(both!(h => unsafe { _mm256_cmp_ps::<_CMP_UNORD_Q>(self.0[h], self.0[h]) }))
+    }
+    /// Lanes where x is finite (neither infinite nor NaN).
+    #[inline(always)]
+    pub fn is_finite(self) -> M {
+        // |x| < ∞ is false for ∞ and NaN.
+        self.abs().lt(F::splat(f32::INFINITY))
+    }
+    /// `x < o`, false for NaN.
+    #[inline(always)]
+    pub fn lt(self, o: F) -> M {
+        mask_of(both!(h => unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(self.0[h], o.0[h]) }))
+    }
+    /// `x <= o`, false for NaN.
+    #[inline(always)]
+    pub fn le(self, o: F) -> M {
+        mask_of(both!(h => unsafe { _mm256_cmp_ps::<_CMP_LE_OQ>(self.0[h], o.0[h]) }))
+    }
+    /// `x > o`, false for NaN.
+    #[inline(always)]
+    pub fn gt(self, o: F) -> M {
+        mask_of(both!(h => unsafe { _mm256_cmp_ps::<_CMP_GT_OQ>(self.0[h], o.0[h]) }))
+    }
+    /// `x >= o`, false for NaN.
+    #[inline(always)]
+    pub fn ge(self, o: F) -> M {
+        mask_of(both!(h => unsafe { _mm256_cmp_ps::<_CMP_GE_OQ>(self.0[h], o.0[h]) }))
+    }
+    /// `x == o`, false for NaN.
+    #[inline(always)]
+    pub fn eq(self, o: F) -> M {
+        mask_of(both!(h => unsafe { _mm256_cmp_ps::<_CMP_EQ_OQ>(self.0[h], o.0[h]) }))
+    }
+    /// `a` where `m`, else `b`.
+    #[inline(always)]
+    pub fn select(m: M, a: F, b: F) -> F {
+        F(
+            both!(h => unsafe { _mm256_blendv_ps(b.0[h], a.0[h], _mm256_castsi256_ps(lanes_of(m, h))) }),
+        )
+    }
+    /// `mag.copysign(sign)`: the magnitude of `mag` with the sign bit of `sign`.
+    #[inline(always)]
+    pub fn copysign(mag: F, sign: F) -> F {
+        let m = mag.abs();
+        F(both!(h => unsafe {
+            let bit = _mm256_castsi256_ps(_mm256_set1_epi32(i32::MIN));
+            _mm256_or_ps(m.0[h], _mm256_and_ps(sign.0[h], bit))
+        }))
+    }
+    /// `f32::next_up` of positive finite numbers: the next float up (one more in the bits).
+    #[inline(always)]
+    pub fn next_up(self) -> F {
+        F(both!(h => unsafe {
+            _mm256_castsi256_ps(_mm256_add_epi32(
+                _mm256_castps_si256(self.0[h]),
+                _mm256_set1_epi32(1),
+            ))
+        }))
+    }
+    /// `a[at..at + 16]`.
+    #[inline(always)]
+    pub fn load_at(a: &[f32], at: usize) -> F {
+        let a: &[f32; 16] = a[at..at + 16].try_into().unwrap();
+        F::load(a)
+    }
+    /// The lanes of `m`, in order, written to `a[at..]`; the rest of `a[at..at + 16]` is
+    /// overwritten with zeros.
+    #[inline(always)]
+    pub fn compress_to(self, m: M, a: &mut [f32], at: usize) {
+        let a: &mut [f32; 16] = (&mut a[at..at + 16]).try_into().unwrap();
+        let x = self.to_array();
+        let mut n = 0;
+        let mut mm = m;
+        while mm != 0 {
+            a[n] = x[mm.trailing_zeros() as usize];
+            mm &= mm - 1;
+            n += 1;
+        }
+        a[n..].fill(0.0);
+    }
+    /// Lane i of `table` for the index in lane i (below 64), gathered.
+    #[inline(always)]
+    pub fn lookup64(table: &[f32; 64], idx: U) -> F {
+        F(both!(h => unsafe {
+            // (An index below 64 reads inside the table.)
+            _mm256_i32gather_ps::<4>(table.as_ptr(), _mm256_and_si256(idx.0[h], _mm256_set1_epi32(63)))
+        }))
+    }
+}
+
+impl Add for F {
+    type Output = F;
+    #[inline(always)]
+    fn add(self, o: F) -> F {
+        F(both!(h => unsafe { _mm256_add_ps(self.0[h], o.0[h]) }))
+    }
+}
+impl Sub for F {
+    type Output = F;
+    #[inline(always)]
+    fn sub(self, o: F) -> F {
+        F(both!(h => unsafe { _mm256_sub_ps(self.0[h], o.0[h]) }))
+    }
+}
+impl Mul for F {
+    type Output = F;
+    #[inline(always)]
+    fn mul(self, o: F) -> F {
+        F(both!(h => unsafe { _mm256_mul_ps(self.0[h], o.0[h]) }))
+    }
+}
+impl Div for F {
+    type Output = F;
+    #[inline(always)]
+    fn div(self, o: F) -> F {
+        F(both!(h => unsafe { _mm256_div_ps(self.0[h], o.0[h]) }))
+    }
+}
+impl Neg for F {
+    type Output = F;
+    /// The sign bit flipped, as Rust's `-x` and glam's `neg`.
+    #[inline(always)]
+    fn neg(self) -> F {
+        F(both!(h => unsafe {
+            _mm256_xor_ps(self.0[h], _mm256_castsi256_ps(_mm256_set1_epi32(i32::MIN)))
+        }))
+    }
+}
+
+impl U {
+    #[inline(always)]
+    pub fn splat(x: u32) -> U {
+        U([unsafe { _mm256_set1_epi32(x as i32) }; 2])
+    }
+    #[inline(always)]
+    pub fn load(a: &[u32; 16]) -> U {
+        U(both!(h => unsafe { _mm256_loadu_si256(a.as_ptr().add(8 * h) as *const _) }))
+    }
+    #[inline(always)]
+    pub fn store(self, a: &mut [u32; 16]) {
+        unsafe {
+            _mm256_storeu_si256(a.as_mut_ptr() as *mut _, self.0[0]);
+            _mm256_storeu_si256(a.as_mut_ptr().add(8) as *mut _, self.0[1]);
+        }
+    }
+    #[inline(always)]
+    pub fn select(m: M, a: U, b: U) -> U {
+        U(both!(h => unsafe { _mm256_blendv_epi8(b.0[h], a.0[h], lanes_of(m, h)) }))
+    }
+    #[inline(always)]
+    pub fn add(self, o: U) -> U {
+        U(both!(h => unsafe { _mm256_add_epi32(self.0[h], o.0[h]) }))
+    }
+    /// Unsigned `x >= o`: max(x, o) == x.
+    #[inline(always)]
+    pub fn ge(self, o: U) -> M {
+        mask_of(both!(h => unsafe {
+            _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_max_epu32(self.0[h], o.0[h]), self.0[h]))
+        }))
+    }
+    /// Unsigned `x < o`.
+    #[inline(always)]
+    pub fn lt(self, o: U) -> M {
+        !self.ge(o)
+    }
+    /// Unsigned `x == o`.
+    #[inline(always)]
+    pub fn eq(self, o: U) -> M {
+        mask_of(both!(h => unsafe { _mm256_castsi256_ps(_mm256_cmpeq_epi32(self.0[h], o.0[h])) }))
+    }
+    /// Lanes whose bits under `mask` equal `value`.
+    #[inline(always)]
+    pub fn masked_eq(self, mask: u32, value: u32) -> M {
+        (self & U::splat(mask)).eq(U::splat(value))
+    }
+    /// Lanes with any of `bits` set.
+    #[inline(always)]
+    pub fn any(self, bits: u32) -> M {
+        !(self & U::splat(bits)).eq(U::splat(0))
+    }
+    /// Lane i of `table` for the index in lane i (below 64), gathered.
+    #[inline(always)]
+    pub fn lookup64(table: &[u32; 64], idx: U) -> U {
+        U(both!(h => unsafe {
+            // (An index below 64 reads inside the table.)
+            _mm256_i32gather_epi32::<4>(
+                table.as_ptr() as *const i32,
+                _mm256_and_si256(idx.0[h], _mm256_set1_epi32(63)),
+            )
+        }))
+    }
+    /// Each lane shifted right by `K` bits.
+    #[inline(always)]
+    pub fn shr<const K: u32>(self) -> U {
+        U(both!(h => unsafe { _mm256_srl_epi32(self.0[h], _mm_cvtsi32_si128(K as i32)) }))
+    }
+    /// The lanes as f32 (exact below 2^24; every caller's lanes are below 2^31, where the
+    /// signed conversion is the unsigned one).
+    #[inline(always)]
+    pub fn to_f32(self) -> F {
+        F(both!(h => unsafe { _mm256_cvtepi32_ps(self.0[h]) }))
+    }
+}
+
+impl BitAnd for U {
+    type Output = U;
+    #[inline(always)]
+    fn bitand(self, o: U) -> U {
+        U(both!(h => unsafe { _mm256_and_si256(self.0[h], o.0[h]) }))
+    }
+}
+
+/// Three-component vectors in sixteen lanes, for `Vec3A` (points, directions) and `Color`
+/// (`glam::Vec3`) alike: every operation is component by component but the dot and cross
+/// products, which follow glam's order.
+#[derive(Clone, Copy)]
+pub struct V3 {
+    pub x: F,
+    pub y: F,
+    pub z: F,
+}
+
+impl V3 {
+    #[inline(always)]
+    pub fn splat(v: [f32; 3]) -> V3 {
+        V3 {
+            x: F::splat(v[0]),
+            y: F::splat(v[1]),
+            z: F::splat(v[2]),
+        }
+    }
+    #[inline(always)]
+    pub fn zero() -> V3 {
+        V3::splat([0.0; 3])
+    }
+    #[inline(always)]
+    pub fn load(a: &[[f32; 16]; 3]) -> V3 {
+        V3 {
+            x: F::load(&a[0]),
+            y: F::load(&a[1]),
+            z: F::load(&a[2]),
+        }
+    }
+    #[inline(always)]
+    pub fn store(self, a: &mut [[f32; 16]; 3]) {
+        self.x.store(&mut a[0]);
+        self.y.store(&mut a[1]);
+        self.z.store(&mut a[2]);
+    }
+    /// glam's `dot`: (x·x' + y·y') + z·z'.
+    #[inline(always)]
+    pub fn dot(self, o: V3) -> F {
+        (self.x * o.x + self.y * o.y) + self.z * o.z
+    }
+    /// glam's `cross`: x = a.y·b.z − b.y·a.z, and so on.
+    #[inline(always)]
+    pub fn cross(self, o: V3) -> V3 {
+        V3 {
+            x: self.y * o.z - o.y * self.z,
+            y: self.z * o.x - o.z * self.x,
+            z: self.x * o.y - o.x * self.y,
+        }
+    }
+    /// glam's `normalize`: each component divided by the length.
+    #[inline(always)]
+    pub fn normalize(self) -> V3 {
+        self.div(self.dot(self).sqrt())
+    }
+    #[inline(always)]
+    pub fn scale(self, s: F) -> V3 {
+        V3 {
+            x: self.x * s,
+            y: self.y * s,
+            z: self.z * s,
+        }
+    }
+    #[inline(always)]
+    pub fn div(self, s: F) -> V3 {
+        V3 {
+            x: self.x / s,
+            y: self.y / s,
+            z: self.z / s,
+        }
+    }
+    #[inline(always)]
+    pub fn abs(self) -> V3 {
+        V3 {
+            x: self.x.abs(),
+            y: self.y.abs(),
+            z: self.z.abs(),
+        }
+    }
+    #[inline(always)]
+    pub fn select(m: M, a: V3, b: V3) -> V3 {
+        V3 {
+            x: F::select(m, a.x, b.x),
+            y: F::select(m, a.y, b.y),
+            z: F::select(m, a.z, b.z),
+        }
+    }
+    /// Lanes where all three components equal zero (`Vec3 == Vec3::ZERO`).
+    #[inline(always)]
+    pub fn is_zero(self) -> M {
+        let z = F::zero();
+        self.x.eq(z) & self.y.eq(z) & self.z.eq(z)
+    }
+    /// Lanes where all three components are finite.
+    #[inline(always)]
+    pub fn is_finite(self) -> M {
+        self.x.is_finite() & self.y.is_finite() & self.z.is_finite()
+    }
+    /// `Vec3::max_element`: x.max(y.max(z)) with `f32::max`.
+    #[inline(always)]
+    pub fn max_element(self) -> F {
+        self.x.max_num2(self.y.max_num2(self.z))
+    }
+    /// Lane i of each component's table.
+    #[inline(always)]
+    pub fn lookup64(table: &[[f32; 64]; 3], idx: U) -> V3 {
+        V3 {
+            x: F::lookup64(&table[0], idx),
+            y: F::lookup64(&table[1], idx),
+            z: F::lookup64(&table[2], idx),
+        }
+    }
+}
+
+impl Add for V3 {
+    type Output = V3;
+    #[inline(always)]
+    fn add(self, o: V3) -> V3 {
+        V3 {
+            x: self.x + o.x,
+            y: self.y + o.y,
+            z: self.z + o.z,
+        }
+    }
+}
+impl Sub for V3 {
+    type Output = V3;
+    #[inline(always)]
+    fn sub(self, o: V3) -> V3 {
+        V3 {
+            x: self.x - o.x,
+            y: self.y - o.y,
+            z: self.z - o.z,
+        }
+    }
+}
+impl Mul for V3 {
+    type Output = V3;
+    #[inline(always)]
+    fn mul(self, o: V3) -> V3 {
+        V3 {
+            x: self.x * o.x,
+            y: self.y * o.y,
+            z: self.z * o.z,
+        }
+    }
+}
+impl Neg for V3 {
+    type Output = V3;
+    #[inline(always)]
+    fn neg(self) -> V3 {
+        V3 {
+            x: -self.x,
+            y: -self.y,
+            z: -self.z,
+        }
+    }
+}
+
+/// The next output of sixteen PCG32 streams ([`crate::sampler::Pcg32`]), of each lane in
+/// `m`; the other lanes' streams do not move (and their outputs are 0). Lane by lane: AVX2
+/// has no 64-bit multiply.
+#[inline(always)]
+pub fn pcg32(state: &mut [u64; 16], inc: &[u64; 16], m: M) -> U {
+    let mut out = [0u32; 16];
+    let mut mm = m;
+    while mm != 0 {
+        let l = mm.trailing_zeros() as usize;
+        mm &= mm - 1;
+        let old = state[l];
+        state[l] = old
+            .wrapping_mul(crate::sampler::PCG_MULT)
+            .wrapping_add(inc[l]);
+        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
+        out[l] = xorshifted.rotate_right((old >> 59) as u32);
+    }
+    U::load(&out)
+}
