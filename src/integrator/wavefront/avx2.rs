@@ -1,5 +1,6 @@
 //! The lanes on AVX2: sixteen f32 lanes in two registers ([`simd`], `simd_avx2.rs`), and every
-//! function that runs them compiled for AVX2 and BMI2, for CPUs without AVX-512.
+//! function that runs them compiled for AVX2, BMI1, BMI2 and POPCNT, for CPUs without
+//! AVX-512.
 //!
 //! The code of the lanes (`bsdf.rs`, `lanes.rs`, `nee.rs`, `path.rs`, `rng.rs`,
 //! `trace.rs`) is written once and compiled twice, here and in [`super::avx512`], each time
@@ -48,7 +49,7 @@ impl Wavefront<'_> {
     /// `super::Wavefront::render_tile`.
     ///
     /// # Safety
-    /// The CPU must have AVX2 and BMI2.
+    /// The CPU must have AVX2, BMI1, BMI2 and POPCNT.
     pub(super) unsafe fn render(
         &self,
         camera: &Camera,

@@ -30,7 +30,8 @@
 //! two-sided, untextured), a mirror (untextured), smooth glass or black; no vertex normals;
 //! one light, a triangle or a parallelogram; the `path` integrator, any number of shadow
 //! rays (one only with AVX2), either sampler. The Cornell box and the TNCG15 room are such
-//! scenes. Any other scene, and any CPU without AVX2 and BMI2, renders with `path::li`.
+//! scenes. Any other scene, and any CPU without AVX2, BMI1, BMI2 and POPCNT, renders with
+//! `path::li`.
 //!
 //! The lanes' code is written once over a small SIMD type of sixteen lanes and compiled
 //! twice ([`Backend`]): in one AVX-512 register ([`avx512`]) and in two AVX2 registers
@@ -109,7 +110,9 @@ impl Backend {
         {
             Some(Backend::Avx512)
         } else if std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("bmi1")
             && std::arch::is_x86_feature_detected!("bmi2")
+            && std::arch::is_x86_feature_detected!("popcnt")
         {
             Some(Backend::Avx2)
         } else {

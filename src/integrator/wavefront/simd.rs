@@ -4,13 +4,14 @@
 //! path computes for its path.
 //!
 //! The operator impls and methods are `#[inline(always)]` functions without target features
-//! that call the intrinsics (directly: a closure would be compiled without the caller's
-//! features); inlined into the wavefront's functions compiled for AVX-512 (`lanes_fn!` in
-//! `avx512.rs`), they become single instructions. They are safe functions that run AVX-512
-//! instructions, which is sound only because nothing outside this private module tree calls
-//! them: every value of these types, and every call of the wavefront's helpers built on
-//! them (`bsdf`, `nee`, `path`), is made inside such a function, which runs only where
-//! `Backend::detect` found the features. `simd_avx2.rs` is the same interface on AVX2.
+//! that call the intrinsics; inlined into the wavefront's functions compiled for AVX-512
+//! (`lanes_fn!` in `avx512.rs`), they become single instructions. (A closure is compiled
+//! without its caller's features, and where it is not inlined its intrinsics are calls:
+//! `simd_avx2.rs` writes its two halves out for that reason.) They are safe functions that
+//! run AVX-512 instructions, which is sound only because nothing outside this private module
+//! tree calls them: every value of these types, and every call of the wavefront's helpers
+//! built on them (`bsdf`, `nee`, `path`), is made inside such a function, which runs only
+//! where `Backend::detect` found the features. `simd_avx2.rs` is the same interface on AVX2.
 
 use std::arch::x86_64::*;
 use std::ops::{Add, BitAnd, Div, Mul, Neg, Sub};
