@@ -411,6 +411,13 @@ fn subtrees<K: Kind>(
         .map(|t| t.refs.as_ptr_range().end as usize)
         .collect();
     let released = tasks.first().map_or(0, |t| t.refs.as_ptr() as usize);
+    // The release of placed subtrees' references relies on their lying in the tasks' order.
+    debug_assert!(
+        tasks
+            .windows(2)
+            .all(|w| w[0].refs.as_ptr_range().end <= w[1].refs.as_ptr()),
+        "the subtrees' references lie in their order"
+    );
     let tasks: Vec<Mutex<Option<Task>>> = tasks.into_iter().map(|t| Mutex::new(Some(t))).collect();
     let next = AtomicUsize::new(0);
     let placing = Mutex::new(Placing {
