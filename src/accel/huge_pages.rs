@@ -26,17 +26,15 @@ pub fn zeroed(n: usize) -> Vec<u32> {
 pub fn sparse<T>(n: usize) -> Vec<T> {
     let v = Vec::with_capacity(n);
     #[cfg(target_os = "linux")]
-    {
-        const PAGE: usize = 4096;
-        let start = v.as_ptr() as usize;
-        let lo = (start + PAGE - 1) & !(PAGE - 1);
-        let hi = (start + n * std::mem::size_of::<T>()) & !(PAGE - 1);
-        if hi > lo {
-            // SAFETY: as in `advise`: advice on how to back memory this process owns.
-            unsafe {
-                libc::madvise(lo as *mut libc::c_void, hi - lo, libc::MADV_NOHUGEPAGE);
-            }
-        }
+    // SAFETY: the range is the vector's allocation, and MADV_NOHUGEPAGE is advice about how
+    // to back it, which leaves its contents as they are.
+    unsafe {
+        madvise_pages(
+            v.as_ptr() as usize,
+            n * std::mem::size_of::<T>(),
+            PAGE,
+            libc::MADV_NOHUGEPAGE,
+        );
     }
     v
 }
@@ -49,21 +47,37 @@ pub fn sparse<T>(n: usize) -> Vec<T> {
 /// The range must lie inside an allocation of this process, whose contents there nobody
 /// reads again (or only as zeros, where zeros are valid values).
 pub unsafe fn release(start: usize, len: usize) {
+    // SAFETY: the caller's promise; MADV_DONTNEED on private anonymous memory leaves it
+    // mapped, reading as zeros.
     #[cfg(target_os = "linux")]
-    {
-        const PAGE: usize = 4096;
-        let lo = (start + PAGE - 1) & !(PAGE - 1);
-        let hi = (start + len) & !(PAGE - 1);
-        if hi > lo {
-            // SAFETY: the caller's promise; MADV_DONTNEED on private anonymous memory
-            // leaves it mapped, reading as zeros.
-            unsafe {
-                libc::madvise(lo as *mut libc::c_void, hi - lo, libc::MADV_DONTNEED);
-            }
-        }
+    unsafe {
+        madvise_pages(start, len, PAGE, libc::MADV_DONTNEED);
     }
     #[cfg(not(target_os = "linux"))]
     let _ = (start, len);
+}
+
+/// The sizes of a page and of a huge page (x86-64 and most AArch64 kernels).
+#[cfg(target_os = "linux")]
+const PAGE: usize = 4096;
+pub const HUGE_PAGE: usize = 2 << 20;
+
+/// `madvise(advice)` over the whole `page`-aligned pages inside `start..start + len` (none
+/// where it holds no whole page).
+///
+/// # Safety
+/// The range must lie inside an allocation of this process, and the advice must leave it
+/// as its users expect.
+#[cfg(target_os = "linux")]
+unsafe fn madvise_pages(start: usize, len: usize, page: usize, advice: libc::c_int) {
+    let lo = (start + page - 1) & !(page - 1);
+    let hi = (start + len) & !(page - 1);
+    if hi > lo {
+        // SAFETY: the caller's promise.
+        unsafe {
+            libc::madvise(lo as *mut libc::c_void, hi - lo, advice);
+        }
+    }
 }
 
 /// Asks for huge pages over the 2 MiB-aligned part of `start..start + len`. Only the
@@ -74,18 +88,10 @@ pub unsafe fn release(start: usize, len: usize) {
 fn advise(start: usize, len: usize) {
     // Arrays smaller than this are left alone (a huge page could hold most of one).
     const MIN_BYTES: usize = 8 << 20;
-    const HUGE_PAGE: usize = 2 << 20;
-    if len < MIN_BYTES {
-        return;
-    }
-    let lo = (start + HUGE_PAGE - 1) & !(HUGE_PAGE - 1);
-    let hi = (start + len) & !(HUGE_PAGE - 1);
-    if hi > lo {
+    if len >= MIN_BYTES {
         // SAFETY: the range lies inside an allocation this process owns, and MADV_HUGEPAGE
         // is advice about how to back it, which leaves its contents as they are.
-        unsafe {
-            libc::madvise(lo as *mut libc::c_void, hi - lo, libc::MADV_HUGEPAGE);
-        }
+        unsafe { madvise_pages(start, len, HUGE_PAGE, libc::MADV_HUGEPAGE) };
     }
 }
 

@@ -365,7 +365,6 @@ impl Placing {
     /// the memory of the references that all placed subtrees are done with, in whole huge
     /// pages not returned before.
     fn ready(&mut self, end: usize) -> (Vec<Placed>, Option<(usize, usize)>) {
-        const HUGE_PAGE: usize = 2 << 20;
         let mut ready = Vec::new();
         while let Some(i) = self.done.iter().position(|d| d.0 == self.next) {
             let (j, nodes, root) = self.done.swap_remove(i);
@@ -379,7 +378,8 @@ impl Placing {
             self.next += 1;
             ready.push((base, nodes));
         }
-        let done = self.next.checked_sub(1).map_or(0, |j| self.ends[j]) & !(HUGE_PAGE - 1);
+        let done =
+            self.next.checked_sub(1).map_or(0, |j| self.ends[j]) & !(huge_pages::HUGE_PAGE - 1);
         let release = (done > self.released).then(|| (self.released, done - self.released));
         self.released = self.released.max(done);
         (ready, release)
