@@ -104,7 +104,6 @@ mod x86 {
         for (name, file, size, spp, shadow_rays, rr, sampler) in cases {
             for threads in [1, cores] {
                 let wide = load(file);
-                let one = load(file).without_wavefront();
                 let over = FileSettings {
                     width: Some(size),
                     height: Some(size),
@@ -118,13 +117,17 @@ mod x86 {
                 if let Some(q) = rr {
                     s.params.rr = RussianRoulette::Fixed(q);
                 }
+                let scalar = mcrt::render::RenderSettings {
+                    backend: mcrt::render::Backend::Scalar,
+                    ..s.clone()
+                };
                 if mcrt::integrator::wavefront::Wavefront::new(&wide, &s).is_none() {
                     println!("| {name} | {threads} | – | not taken on this CPU | – |");
                     continue;
                 }
                 let (mut a, mut b) = (Vec::new(), Vec::new());
                 for _ in 0..rounds {
-                    let (ta, fa) = time(&one, &s);
+                    let (ta, fa) = time(&wide, &scalar);
                     let (tb, fb) = time(&wide, &s);
                     assert!(fa == fb, "{name}: the films differ");
                     a.push(ta);

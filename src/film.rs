@@ -1,5 +1,8 @@
 //! The film: per-pixel sums of radiance samples (box filter: every sample of a pixel counts
-//! equally).
+//! equally), and splats: contributions that an estimator adds to any pixel (light tracing
+//! and bidirectional methods connect a light path to the camera wherever it projects), kept
+//! in a second set of sums normalised by the number of paths traced rather than by each
+//! pixel's sample count (Veach 1997, §10.3.3).
 //!
 //! The sums are kept in fixed point (i128 integers, see [`SUM_FRAC_BITS`] and
 //! [`SQ_FRAC_BITS`]) rather than in floating point. Each f32 sample is rounded once to the
@@ -114,6 +117,31 @@ pub struct Film {
     pub sum_sq: Vec<[i128; 3]>,
     /// Samples per pixel that reached the film.
     pub count: Vec<u32>,
+    /// Σ of splatted contributions per pixel and channel, in the fixed point of `sum`; empty
+    /// until the first splat, so a film without splats carries nothing for them.
+    pub splat: Vec<[i128; 3]>,
+    /// Paths whose splats `splat` holds: each pixel's value is its samples' mean plus its
+    /// splats' sum divided by this.
+    pub splat_paths: u64,
+}
+
+/// Splats made by one worker, added to the film in one step ([`Film::add_splats`]) so that
+/// workers share no lock per splat. The film's sums are integers, so the image is the same
+/// bits in whatever order workers add their splats.
+#[derive(Clone, Debug, Default)]
+pub struct Splats {
+    /// (pixel index, contribution).
+    pub values: Vec<(u32, Color)>,
+    /// Paths traced, whether or not they splatted anything.
+    pub paths: u64,
+}
+
+impl Splats {
+    /// A contribution `l` to pixel (x, y) of a `width`-pixel-wide film.
+    #[inline]
+    pub fn add(&mut self, x: u32, y: u32, width: u32, l: Color) {
+        self.values.push((y * width + x, l));
+    }
 }
 
 /// One pixel's accumulated samples, gathered by a tile before it is written to the film.
@@ -155,7 +183,30 @@ impl Film {
             sum: vec![[0; 3]; n],
             sum_sq: vec![[0; 3]; n],
             count: vec![0; n],
+            splat: Vec::new(),
+            splat_paths: 0,
         }
+    }
+
+    /// Adds a worker's splats; non-finite contributions are dropped (and counted), as
+    /// non-finite samples are.
+    pub fn add_splats(&mut self, s: &Splats) -> u64 {
+        if self.splat.is_empty() && !s.values.is_empty() {
+            self.splat = vec![[0; 3]; self.sum.len()];
+        }
+        let mut dropped = 0;
+        for &(i, l) in &s.values {
+            if !l.is_finite() {
+                dropped += 1;
+                continue;
+            }
+            let p = &mut self.splat[i as usize];
+            for c in 0..3 {
+                p[c] = p[c].wrapping_add(fixed_from_f32(l[c], SUM_FRAC_BITS));
+            }
+        }
+        self.splat_paths += s.paths;
+        dropped
     }
 
     /// The running sums of pixel (x, y).
@@ -196,6 +247,17 @@ impl Film {
             self.sum_sq[i] = p.sum_sq;
             self.count[i] = p.count;
         }
+        if !other.splat.is_empty() {
+            if self.splat.is_empty() {
+                self.splat = vec![[0; 3]; self.sum.len()];
+            }
+            for (a, b) in self.splat.iter_mut().zip(&other.splat) {
+                for c in 0..3 {
+                    a[c] = a[c].wrapping_add(b[c]);
+                }
+            }
+        }
+        self.splat_paths += other.splat_paths;
     }
 
     /// Σ L per pixel and channel as numbers.
@@ -208,16 +270,27 @@ impl Film {
         self.sum_sq.iter().map(|s| s.map(sq_to_f64)).collect()
     }
 
-    /// The image: the mean of each pixel's samples.
+    /// The image: the mean of each pixel's samples, plus its splats over the paths traced.
     pub fn image(&self) -> Image {
+        let ks = if self.splat_paths > 0 {
+            1.0 / self.splat_paths as f64
+        } else {
+            0.0
+        };
         let pixels = self
             .sum
             .iter()
             .zip(&self.count)
-            .map(|(s, &n)| {
+            .enumerate()
+            .map(|(i, (s, &n))| {
                 let k = if n > 0 { 1.0 / n as f64 } else { 0.0 };
-                let s = s.map(sum_to_f64);
-                Color::new((s[0] * k) as f32, (s[1] * k) as f32, (s[2] * k) as f32)
+                let mut v = s.map(|x| sum_to_f64(x) * k);
+                if let Some(sp) = self.splat.get(i) {
+                    for c in 0..3 {
+                        v[c] += sum_to_f64(sp[c]) * ks;
+                    }
+                }
+                Color::new(v[0] as f32, v[1] as f32, v[2] as f32)
             })
             .collect();
         Image {
@@ -307,6 +380,57 @@ mod tests {
                 "Σ² of {v:e}"
             );
         }
+    }
+
+    /// Splats added by workers in any order, and films added in any order, give the same
+    /// bits; the image is each pixel's mean plus its splats over the paths traced.
+    #[test]
+    fn splats_do_not_depend_on_order() {
+        let vals = [1.0e10f32, 3.0e-6, 3.0e-6, 0.1, 0.7, 1.0e-6, 2.5];
+        let mut workers: Vec<Splats> = (0..3).map(|_| Splats::default()).collect();
+        for (k, &v) in vals.iter().enumerate() {
+            workers[k % 3].add((k % 2) as u32, 1, 2, Color::new(v, -v, 0.5 * v));
+            workers[k % 3].paths += 2;
+        }
+        workers[1].add(0, 0, 2, Color::new(f32::NAN, 0.0, 0.0));
+        let film_of = |order: &[usize]| {
+            let mut f = Film::new(2, 2);
+            let mut dropped = 0;
+            for &w in order {
+                dropped += f.add_splats(&workers[w]);
+            }
+            (f, dropped)
+        };
+        let (a, da) = film_of(&[0, 1, 2]);
+        let (b, db) = film_of(&[2, 0, 1]);
+        assert_eq!((da, db), (1, 1));
+        assert!(a == b, "splat order changed the film");
+        assert_eq!(a.splat_paths, 2 * vals.len() as u64);
+        // Two films, each with some of the splats, added in either order.
+        let (mut c, _) = film_of(&[0]);
+        let (d, _) = film_of(&[1, 2]);
+        let (mut d2, _) = film_of(&[1, 2]);
+        c.add_film(&d);
+        d2.add_film(&film_of(&[0]).0);
+        assert!(c == a && d2 == a, "film addition changed the splats");
+        // The image: pixel (1, 1) has the odd-indexed values, pixel (0, 1) the even ones.
+        let mut px = PixelSums::default();
+        px.add(Color::splat(4.0));
+        let mut e = a.clone();
+        e.set_pixel(1, 1, &px);
+        let img = e.image();
+        let odd: f64 = vals.iter().skip(1).step_by(2).map(|&v| v as f64).sum();
+        let want = 4.0 + odd / a.splat_paths as f64;
+        assert!(
+            (img.pixels[3].x as f64 - want).abs() <= 1e-6 * want,
+            "{:?}",
+            img.pixels[3]
+        );
+        assert_eq!(
+            img.pixels[1],
+            Color::ZERO,
+            "a pixel without samples or splats"
+        );
     }
 
     /// Samples whose f64 running sums depend on the grouping give the same fixed-point sums

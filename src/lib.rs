@@ -64,7 +64,8 @@ impl Error {
             | Error::Parts(_)
             | Error::Input(_)
             | Error::Render(render::RenderError::NoCamera(..))
-            | Error::Render(render::RenderError::NoCameras) => 2,
+            | Error::Render(render::RenderError::NoCameras)
+            | Error::Render(render::RenderError::Unsupported(_)) => 2,
             Error::Image(
                 image::ImageError::UnknownFormat { .. }
                 | image::ImageError::NoDirectory { .. }
@@ -238,5 +239,6 @@ pub fn resolve_settings(
         crop,
         sampler: over.sampler.or(file.sampler).unwrap_or_default(),
         threads,
+        backend: Default::default(),
     })
 }

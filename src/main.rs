@@ -207,6 +207,11 @@ struct RenderArgs {
     /// Camera to render, by name (default: the scene's, else its first).
     #[arg(long)]
     camera: Option<String>,
+    /// How the path tracer runs: auto (the fastest the CPU and scene allow), scalar (one path
+    /// at a time), avx512 or avx2 (sixteen at a time; refused where unavailable). The image
+    /// does not depend on it.
+    #[arg(long, value_name = "auto|scalar|avx512|avx2", value_parser = parse_backend)]
+    backend: Option<mcrt::render::Backend>,
     #[command(flatten)]
     image: ImageArgs,
     /// Render only pass K of N (1-based): samples [⌊(K−1)·spp/N⌋, ⌊K·spp/N⌋) of every pixel,
@@ -431,6 +436,7 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
     }
     let mut settings = mcrt::resolve_settings(&file_settings, &over, a.threads)?;
     settings.params.photon = a.photon.params()?;
+    settings.backend = a.backend.unwrap_or_default();
     mcrt::check_memory(&settings).map_err(|e| match (a.width, a.height) {
         // The size came from the scene file: say so.
         (None, None) => Error::Scene(SceneError::new(&a.scene, None, e.to_string())),
@@ -465,10 +471,7 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
     let npix = fw as u64 * fh as u64;
     let scene_bytes = std::fs::read(&a.scene).unwrap_or_default();
     let extra = format!("defines={:?} lenient={}", a.define, a.lenient);
-    if matches!(
-        settings.params.kind,
-        IntegratorKind::Photon | IntegratorKind::Sppm
-    ) {
+    if settings.params.kind == IntegratorKind::Sppm {
         return render_photon(&a, &scene, &settings, &output, load_time);
     }
     if let Some(pass) = a.pass {
@@ -633,6 +636,7 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
                 _ => String::new(),
             }
         );
+        print_photon_stats(stats);
         if interrupted || a.checkpoint.is_some() {
             eprintln!(
                 "checkpoint: {} (continue with --resume {})",
@@ -643,6 +647,23 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
         warn_dropped(stats);
     }
     Ok(if interrupted { INTERRUPTED } else { 0 })
+}
+
+fn print_photon_stats(stats: &mcrt::render::RenderStats) {
+    if stats.photons_stored > 0 {
+        eprintln!(
+            "photon maps: {} photons stored ({:.1} MB, {} bytes each), traced and built in {:.2} s",
+            stats.photons_stored,
+            stats.photon_bytes as f64 / 1e6,
+            std::mem::size_of::<mcrt::photon::Photon>(),
+            stats.photon_time.as_secs_f64()
+        );
+    }
+}
+
+fn parse_backend(s: &str) -> Result<mcrt::render::Backend, String> {
+    mcrt::render::Backend::parse(s)
+        .ok_or_else(|| format!("expected auto, scalar, avx512 or avx2, got '{s}'"))
 }
 
 fn warn_dropped(stats: &mcrt::render::RenderStats) {
@@ -791,7 +812,7 @@ fn render_photon(
     {
         return Err(Error::Usage(format!(
             "--integrator {} renders the whole image at once: --pass, --time, --target-noise, \
-             --resume, --write-partial and --aov apply to path and direct",
+             --resume, --write-partial and --aov apply to path, direct and photon",
             settings.params.kind.name()
         )));
     }
@@ -833,15 +854,7 @@ fn render_photon(
             rays as f64 / secs / 1e6,
             stats.rays.shadow_rays as f64 / secs / 1e6,
         );
-        if stats.photons_stored > 0 {
-            eprintln!(
-                "photon maps: {} photons stored ({:.1} MB, {} bytes each), traced and built in {:.2} s",
-                stats.photons_stored,
-                stats.photon_bytes as f64 / 1e6,
-                std::mem::size_of::<mcrt::photon::Photon>(),
-                stats.photon_time.as_secs_f64()
-            );
-        }
+        print_photon_stats(&stats);
         warn_dropped(&stats);
     }
     Ok(0)

@@ -29,6 +29,7 @@
 //! doubling); the others keep all their samples and stop.
 
 use crate::film::Film;
+use crate::integrator;
 use crate::render::{render_ranges, RenderError, RenderSettings, RenderStats};
 use crate::scene::Scene;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -138,7 +139,8 @@ pub type AfterPass<'a, E> = dyn FnMut(&Film, &[u32]) -> Result<(), E> + 'a;
 /// Renders passes into `film` (with per-pixel sample indices `next`, see the module
 /// documentation) until the budget is spent or `cancel` is set. After each pass that rendered
 /// anything, `after_pass(film, next)` runs (for partial images and checkpoints); an error
-/// from it ends the render.
+/// from it ends the render. The integrator is made ready once (photon maps are built before
+/// the first pass, inside the time budget) and renders every pass.
 #[allow(clippy::too_many_arguments)]
 pub fn render_progressive<E: From<RenderError>>(
     scene: &Scene,
@@ -152,12 +154,16 @@ pub fn render_progressive<E: From<RenderError>>(
 ) -> Result<Outcome, E> {
     let start = Instant::now();
     let deadline = budget.time.map(|t| start + t);
+    let integrator = integrator::prepare(scene, s)?;
     let cap = budget.spp.unwrap_or(u32::MAX);
     let npix = next.len().max(1) as f64;
     let mut stats = RenderStats::default();
     let mut passes = 0;
     let mut noise = None;
-    let out = |stop, stats, passes, noise| {
+    // The integrator's setup counts in the outcome, not in the pass rate below.
+    let out = |stop, pass_stats: RenderStats, passes, noise| {
+        let mut stats = integrator.setup_stats();
+        stats.add(&pass_stats);
         Ok(Outcome {
             stop,
             stats,
@@ -239,7 +245,16 @@ pub fn render_progressive<E: From<RenderError>>(
         }
         let stop =
             || cancel.load(Ordering::SeqCst) || deadline.is_some_and(|d| Instant::now() >= d);
-        let st = render_ranges(scene, s, film, next, &|i| targets[i], &stop, progress)?;
+        let st = render_ranges(
+            &*integrator,
+            scene,
+            s,
+            film,
+            next,
+            &|i| targets[i],
+            &stop,
+            progress,
+        )?;
         stats.add(&st);
         passes += 1;
         after_pass(film, next)?;

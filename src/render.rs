@@ -2,12 +2,9 @@
 //! sample with its own random stream, so the image is the same on any number of threads.
 
 use crate::film::{Film, PixelSums};
-use crate::geometry::Ray;
-use crate::integrator::{self, IntegratorKind, IntegratorParams, RayStats};
-use crate::photon::PhotonMaps;
+use crate::integrator::{self, Integrator, IntegratorKind, IntegratorParams, RayStats};
 use crate::sampler::{Sampler, SamplerKind};
 use crate::scene::Scene;
-use crate::Color;
 use rayon::prelude::*;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
@@ -29,6 +26,47 @@ pub struct RenderSettings {
     pub threads: Option<usize>,
     /// Render only this window (x, y, width, height) of the width × height image.
     pub crop: Option<[u32; 4]>,
+    /// How the samples are computed; the image does not depend on it.
+    pub backend: Backend,
+}
+
+/// How the path tracer's samples run: an execution policy of the render, not a property of
+/// the scene. Every backend gives the same bits ([`crate::integrator::wavefront`] follows
+/// the scalar path's operations lane for lane), so it is not part of a checkpoint's
+/// settings: a render may be resumed on another machine with another backend.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Backend {
+    /// The fastest that the CPU, the scene and the integrator allow.
+    #[default]
+    Auto,
+    /// One path at a time.
+    Scalar,
+    /// Sixteen paths at a time in one AVX-512 register; refused where the CPU or the scene
+    /// cannot.
+    Avx512,
+    /// Sixteen paths at a time in two AVX2 registers; refused likewise.
+    Avx2,
+}
+
+impl Backend {
+    pub fn parse(s: &str) -> Option<Backend> {
+        Some(match s {
+            "auto" => Backend::Auto,
+            "scalar" => Backend::Scalar,
+            "avx512" => Backend::Avx512,
+            "avx2" => Backend::Avx2,
+            _ => return None,
+        })
+    }
+
+    pub fn name(&self) -> &'static str {
+        match self {
+            Backend::Auto => "auto",
+            Backend::Scalar => "scalar",
+            Backend::Avx512 => "avx512",
+            Backend::Avx2 => "avx2",
+        }
+    }
 }
 
 impl RenderSettings {
@@ -82,6 +120,9 @@ pub enum RenderError {
     NoCameras,
     #[error("{0}")]
     Threads(String),
+    /// An integrator or backend that cannot render these settings.
+    #[error("{0}")]
+    Unsupported(String),
 }
 
 /// The camera the settings name, built for the image size.
@@ -97,9 +138,6 @@ pub fn camera_for(scene: &Scene, s: &RenderSettings) -> Result<crate::camera::Ca
     Ok(cam_desc.build(s.width, s.height))
 }
 
-/// Radiance along a camera ray: an integrator with whatever it has built (photon maps).
-pub type LiFn<'a> = dyn Fn(Ray, &mut Sampler, &mut RayStats) -> Color + Sync + 'a;
-
 /// Renders samples [first, first + count) of every pixel into `film`.
 pub fn render_samples(
     scene: &Scene,
@@ -109,24 +147,21 @@ pub fn render_samples(
     count: u32,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<RenderStats, RenderError> {
+    let integrator = integrator::prepare(scene, s)?;
     let mut next = vec![first; film.count.len()];
     let until = |_| first + count;
-    render_ranges(scene, s, film, &mut next, &until, &|| false, progress)
-}
-
-/// [`render_samples`] with the radiance given by `li`.
-pub fn render_samples_with(
-    scene: &Scene,
-    s: &RenderSettings,
-    film: &mut Film,
-    first: u32,
-    count: u32,
-    progress: &(dyn Fn(u64) + Sync),
-    li: &LiFn,
-) -> Result<RenderStats, RenderError> {
-    let mut next = vec![first; film.count.len()];
-    let until = |_| first + count;
-    render_ranges_with(scene, s, film, &mut next, &until, &|| false, progress, li)
+    let mut stats = integrator.setup_stats();
+    stats.add(&render_ranges(
+        &*integrator,
+        scene,
+        s,
+        film,
+        &mut next,
+        &until,
+        &|| false,
+        progress,
+    )?);
+    Ok(stats)
 }
 
 /// Runs `work` on `s.threads` worker threads (or rayon's global pool).
@@ -144,95 +179,32 @@ pub fn with_threads<R: Send>(
     }
 }
 
-/// Renders, for each pixel i of the film (row-major), samples [next[i], until(i)) and sets
-/// next[i] = until(i) (nothing where until(i) ≤ next[i]). Each pixel's samples are added in
-/// index order to its running sums, and a sample's value depends only on (seed, pixel, index),
-/// so the film after any sequence of calls that leaves pixel i at next[i] = n holds exactly
-/// samples [0, n) of it, bit for bit, however they were split.
-///
-/// `stop` is asked before each tile: once it returns true, the tiles not yet started are
-/// skipped (their pixels keep their `next`), so an abandoned call leaves the film and `next`
-/// consistent — every pixel holds a prefix of its sample sequence. `stats.skipped_tiles`
-/// counts them.
-pub fn render_ranges(
-    scene: &Scene,
+/// Renders the samples of a tile's pixels into their sums (`sums[k]` for `pixels[k]`): all
+/// at once where the integrator can, else one [`Integrator::li`] at a time.
+fn render_tile(
+    integrator: &dyn Integrator,
     s: &RenderSettings,
-    film: &mut Film,
-    next: &mut [u32],
-    until: &(dyn Fn(usize) -> u32 + Sync),
-    stop: &(dyn Fn() -> bool + Sync),
-    progress: &(dyn Fn(u64) + Sync),
-) -> Result<RenderStats, RenderError> {
-    let li = |ray: Ray, sampler: &mut Sampler, stats: &mut RayStats| {
-        integrator::li(scene, ray, sampler, &s.params, stats)
-    };
-    render_tiles(
-        scene,
-        s,
-        film,
-        next,
-        until,
-        stop,
-        progress,
-        &Tracer::new(scene, s, &li),
-    )
-}
-
-/// How a tile's samples are rendered: one at a time by `li`, or sixteen paths at a time by
-/// the path tracer's wavefront where the scene, the settings and the CPU allow (the same
-/// values either way; see [`crate::integrator::wavefront`]).
-struct Tracer<'a> {
-    li: &'a LiFn<'a>,
-    #[cfg(target_arch = "x86_64")]
-    wavefront: Option<crate::integrator::wavefront::Wavefront<'a>>,
-}
-
-impl<'a> Tracer<'a> {
-    /// `li` is the path tracer's: the wavefront may stand in for it.
-    fn new(scene: &'a Scene, s: &RenderSettings, li: &'a LiFn<'a>) -> Tracer<'a> {
-        Tracer {
-            li,
-            #[cfg(target_arch = "x86_64")]
-            wavefront: crate::integrator::wavefront::Wavefront::new(scene, s),
-        }
+    camera: &crate::camera::Camera,
+    pixels: &[TilePixel],
+    sums: &mut [PixelSums],
+    stats: &mut RenderStats,
+) {
+    if integrator.render_tile(camera, pixels, sums, stats) {
+        return;
     }
-
-    /// Any `li` one sample at a time.
-    fn per_sample(li: &'a LiFn<'a>) -> Tracer<'a> {
-        Tracer {
-            li,
-            #[cfg(target_arch = "x86_64")]
-            wavefront: None,
-        }
-    }
-
-    /// Renders the samples of a tile's pixels into their sums (`sums[k]` for `pixels[k]`).
-    fn render_tile(
-        &self,
-        s: &RenderSettings,
-        camera: &crate::camera::Camera,
-        pixels: &[TilePixel],
-        sums: &mut [PixelSums],
-        stats: &mut RenderStats,
-    ) {
-        #[cfg(target_arch = "x86_64")]
-        if let Some(w) = &self.wavefront {
-            return w.render_tile(camera, pixels, sums, stats);
-        }
-        for (p, px) in pixels.iter().zip(sums) {
-            // Random numbers follow the pixel of the full image, so a crop renders the same
-            // values as the whole image does there.
-            let pixel = p.gy as u64 * s.width as u64 + p.gx as u64;
-            for i in p.samples.0..p.samples.1 {
-                let mut sampler = Sampler::for_sample(s.sampler, s.seed, pixel, i as u64);
-                let ray = camera.generate_ray(p.gx, p.gy, sampler.next_2d());
-                let l = (self.li)(ray, &mut sampler, &mut stats.rays);
-                if l.is_finite() {
-                    px.add(l);
-                } else {
-                    stats.dropped += 1;
-                    stats.first_dropped.get_or_insert((p.x, p.y));
-                }
+    for (p, px) in pixels.iter().zip(sums) {
+        // Random numbers follow the pixel of the full image, so a crop renders the same
+        // values as the whole image does there.
+        let pixel = p.gy as u64 * s.width as u64 + p.gx as u64;
+        for i in p.samples.0..p.samples.1 {
+            let mut sampler = Sampler::for_sample(s.sampler, s.seed, pixel, i as u64);
+            let ray = camera.generate_ray(p.gx, p.gy, sampler.next_2d());
+            let l = integrator.li(ray, &mut sampler, &mut stats.rays);
+            if l.is_finite() {
+                px.add(l);
+            } else {
+                stats.dropped += 1;
+                stats.first_dropped.get_or_insert((p.x, p.y));
             }
         }
     }
@@ -249,9 +221,21 @@ pub struct TilePixel {
     pub samples: (u32, u32),
 }
 
-/// [`render_ranges`] with the radiance given by `li`.
+/// Renders, for each pixel i of the film (row-major), samples [next[i], until(i)) and sets
+/// next[i] = until(i) (nothing where until(i) ≤ next[i]). Each pixel's samples are added in
+/// index order to its running sums, and a sample's value depends only on (seed, pixel, index),
+/// so the film after any sequence of calls that leaves pixel i at next[i] = n holds exactly
+/// samples [0, n) of it, bit for bit, however they were split.
+///
+/// `stop` is asked before each tile: once it returns true, the tiles not yet started are
+/// skipped (their pixels keep their `next`), so an abandoned call leaves the film and `next`
+/// consistent — every pixel holds a prefix of its sample sequence. `stats.skipped_tiles`
+/// counts them.
+///
+/// The image's tiles are rendered in parallel, each tile's samples by `integrator`.
 #[allow(clippy::too_many_arguments)]
-pub fn render_ranges_with(
+pub fn render_ranges(
+    integrator: &dyn Integrator,
     scene: &Scene,
     s: &RenderSettings,
     film: &mut Film,
@@ -259,23 +243,6 @@ pub fn render_ranges_with(
     until: &(dyn Fn(usize) -> u32 + Sync),
     stop: &(dyn Fn() -> bool + Sync),
     progress: &(dyn Fn(u64) + Sync),
-    li: &LiFn,
-) -> Result<RenderStats, RenderError> {
-    let tracer = Tracer::per_sample(li);
-    render_tiles(scene, s, film, next, until, stop, progress, &tracer)
-}
-
-/// [`render_ranges`]' work: the image's tiles in parallel, each tile's samples by `tracer`.
-#[allow(clippy::too_many_arguments)]
-fn render_tiles(
-    scene: &Scene,
-    s: &RenderSettings,
-    film: &mut Film,
-    next: &mut [u32],
-    until: &(dyn Fn(usize) -> u32 + Sync),
-    stop: &(dyn Fn() -> bool + Sync),
-    progress: &(dyn Fn(u64) + Sync),
-    tracer: &Tracer,
 ) -> Result<RenderStats, RenderError> {
     let camera = camera_for(scene, s)?;
     let (ox, oy, fw, fh) = s.window();
@@ -322,7 +289,7 @@ fn render_tiles(
                     samples,
                 })
                 .collect();
-            tracer.render_tile(s, &camera, &pixels, &mut sums, &mut stats);
+            render_tile(integrator, s, &camera, &pixels, &mut sums, &mut stats);
             {
                 let mut g = shared.lock().unwrap();
                 let (film, next, total) = &mut *g;
@@ -361,27 +328,9 @@ pub fn render(
 ) -> Result<(Film, RenderStats), RenderError> {
     let (_, _, w, h) = s.window();
     let mut film = Film::new(w, h);
-    let stats = match s.params.kind {
-        IntegratorKind::Sppm => {
-            return integrator::sppm::render_sppm(scene, s, progress, &mut |_, _| {}, &|_| false)
-        }
-        IntegratorKind::Photon => {
-            camera_for(scene, s)?;
-            let maps = with_threads(s, || PhotonMaps::build(scene, &s.params, s.seed))?;
-            let ctx = integrator::photon::PhotonContext::new(scene, &maps);
-            let li = |ray: Ray, sampler: &mut Sampler, stats: &mut RayStats| {
-                integrator::photon::li(scene, &ctx, ray, sampler, &s.params, stats)
-            };
-            let mut stats = render_samples_with(scene, s, &mut film, 0, s.spp, progress, &li)?;
-            stats.photons_stored =
-                (maps.global.len() + maps.caustic.len() + maps.shadow.len()) as u64;
-            stats.photon_bytes = maps.memory_bytes() as u64;
-            stats.photon_time = maps.build_time;
-            stats.rays.rays += maps.rays;
-            stats.elapsed += maps.build_time;
-            stats
-        }
-        _ => render_samples(scene, s, &mut film, 0, s.spp, progress)?,
-    };
+    if s.params.kind == IntegratorKind::Sppm {
+        return integrator::sppm::render_sppm(scene, s, progress, &mut |_, _| {}, &|_| false);
+    }
+    let stats = render_samples(scene, s, &mut film, 0, s.spp, progress)?;
     Ok((film, stats))
 }

@@ -391,3 +391,89 @@ fn compare_known_images() {
     assert!(err.contains("differ in size"), "{err}");
     assert!(o.stdout.is_empty());
 }
+
+/// Photon mapping renders through the same integrator seam as the path tracer: its passes
+/// merge to its single render bit for bit (every process builds the same maps from the
+/// seed), and a render interrupted by its time budget resumes to the same bits.
+#[test]
+fn photon_mapping_takes_passes_and_resumes() {
+    let dir = TempDir::new("photon-passes");
+    let flags = [
+        "--integrator",
+        "photon",
+        "--photons",
+        "3000",
+        "--caustic-photons",
+        "3000",
+        "--final-gather",
+        "2",
+    ];
+    let single = dir.path().join("single.exr");
+    ok(&render_cmd(&single, 6, &flags).output().unwrap(), "render");
+    let parts: Vec<PathBuf> = (1..=3)
+        .map(|k| {
+            let p = dir.path().join(format!("p{k}.exr"));
+            let pass = format!("{k}/3");
+            let mut args = flags.to_vec();
+            args.extend(["--pass", pass.as_str()]);
+            ok(&render_cmd(&p, 6, &args).output().unwrap(), "photon pass");
+            p
+        })
+        .collect();
+    let merged = dir.path().join("merged.exr");
+    ok(&merge(&parts, &merged, &[]), "merge");
+    let a = read_exr(&single).unwrap();
+    assert!(a.pixels.iter().any(|p| p.max_element() > 0.0), "lit");
+    assert!(
+        bits(&a) == bits(&read_exr(&merged).unwrap()),
+        "photon passes merged differ from the single render"
+    );
+    // Half the samples with a checkpoint, then resumed to all of them.
+    let half = dir.path().join("half.exr");
+    let ck = dir.path().join("half.checkpoint.exr");
+    let mut args = flags.to_vec();
+    args.extend(["--checkpoint", ck.to_str().unwrap()]);
+    ok(&render_cmd(&half, 3, &args).output().unwrap(), "first half");
+    let resumed = dir.path().join("resumed.exr");
+    let mut args = flags.to_vec();
+    args.extend(["--resume", ck.to_str().unwrap()]);
+    ok(&render_cmd(&resumed, 6, &args).output().unwrap(), "resume");
+    assert!(
+        bits(&a) == bits(&read_exr(&resumed).unwrap()),
+        "a resumed photon render differs from the single render"
+    );
+}
+
+/// The backend is a render setting: forcing one path at a time gives the default's bits,
+/// and a backend the CPU or the scene cannot run is refused before rendering, exit 2.
+#[test]
+fn backend_is_a_render_setting() {
+    let dir = TempDir::new("backend");
+    let auto = dir.path().join("auto.exr");
+    ok(&render_cmd(&auto, 4, &[]).output().unwrap(), "auto");
+    let scalar = dir.path().join("scalar.exr");
+    ok(
+        &render_cmd(&scalar, 4, &["--backend", "scalar"])
+            .output()
+            .unwrap(),
+        "scalar",
+    );
+    assert!(bits(&read_exr(&auto).unwrap()) == bits(&read_exr(&scalar).unwrap()));
+    // Direct lighting runs one path at a time: a wide backend is refused for it.
+    let out = dir.path().join("refused.exr");
+    let o = render_cmd(&out, 4, &["--backend", "avx2", "--integrator", "direct"])
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--backend avx2"));
+    assert!(!out.exists(), "nothing written");
+    let o = render_cmd(&out, 4, &["--backend", "sse9"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+}

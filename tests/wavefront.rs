@@ -6,14 +6,14 @@
 //! light; both roulettes; every path length), on odd image sizes, crops and split passes.
 //!
 //! Both of its backends are compared where the CPU has them: AVX-512, and AVX2 (which a CPU
-//! with AVX-512 runs when the scene asks, `Scene::without_avx512_wavefront`). On a CPU
+//! with AVX-512 runs when the render settings force it, `Backend::Avx2`). On a CPU
 //! without AVX2 and BMI2 the wavefront never runs and there is nothing to compare; the tests
 //! say so and pass. (The wavefront is x86-64 code; elsewhere there is nothing here.)
 #![cfg(target_arch = "x86_64")]
 
 use mcrt::film::Film;
 use mcrt::integrator::wavefront::Wavefront;
-use mcrt::render::{render, render_samples, RenderSettings, RenderStats};
+use mcrt::render::{render, render_samples, Backend, RenderSettings, RenderStats};
 use mcrt::scene::desc::FileSettings;
 use mcrt::scene::Scene;
 use std::path::Path;
@@ -59,6 +59,14 @@ fn settings(scene: &Scene, over: FileSettings) -> RenderSettings {
     mcrt::resolve_settings(&scene.desc_settings, &over, Some(2)).unwrap()
 }
 
+/// `s` with its backend forced.
+fn with_backend(s: &RenderSettings, backend: Backend) -> RenderSettings {
+    RenderSettings {
+        backend,
+        ..s.clone()
+    }
+}
+
 /// Renders `scene` with `s` both ways and compares everything the film and the statistics
 /// hold. `scene` must be one the wavefront takes.
 fn same_both_ways(scene: Scene, s: &RenderSettings, what: &str) -> (Film, RenderStats) {
@@ -72,30 +80,34 @@ fn same_both_ways(scene: Scene, s: &RenderSettings, what: &str) -> (Film, Render
         "{what}: the wavefront does not take this scene, so the test would compare nothing"
     );
     let (wide, ws) = render(&scene, s, &|_| {}).unwrap();
-    let scene = if cpu_has_avx512() {
+    if cpu_has_avx512() {
         // The AVX2 backend too, against the same film (it declines several shadow rays a
-        // vertex, and the path tracer then renders them).
-        let scene = scene.without_avx512_wavefront();
+        // vertex: forced, it is refused).
+        let avx2 = with_backend(s, Backend::Avx2);
         assert_eq!(
-            Wavefront::new(&scene, s).is_some(),
+            Wavefront::new(&scene, &avx2).is_some(),
             s.params.shadow_rays == 1,
             "{what}: the AVX2 backend takes the scene with one shadow ray a vertex only"
         );
-        let (narrow, ns) = render(&scene, s, &|_| {}).unwrap();
-        same_film(
-            &narrow,
-            &ns,
-            &wide,
-            &ws,
-            &format!("{what}, AVX2 against AVX-512"),
-        );
-        scene
-    } else {
-        scene
-    };
-    let scalar = scene.without_wavefront();
-    assert!(Wavefront::new(&scalar, s).is_none());
-    let (one, os) = render(&scalar, s, &|_| {}).unwrap();
+        if s.params.shadow_rays == 1 {
+            let (narrow, ns) = render(&scene, &avx2, &|_| {}).unwrap();
+            same_film(
+                &narrow,
+                &ns,
+                &wide,
+                &ws,
+                &format!("{what}, AVX2 against AVX-512"),
+            );
+        } else {
+            assert!(
+                render(&scene, &avx2, &|_| {}).is_err(),
+                "{what}: AVX2 forced"
+            );
+        }
+    }
+    let scalar = with_backend(s, Backend::Scalar);
+    assert!(Wavefront::new(&scene, &scalar).is_none());
+    let (one, os) = render(&scene, &scalar, &|_| {}).unwrap();
     same_film(&wide, &ws, &one, &os, what);
     (wide, ws)
 }
@@ -388,9 +400,9 @@ fn crop_and_passes_both_ways() {
     let mut wide = Film::new(35, 29);
     render_samples(&scene, &s, &mut wide, 0, 2, &|_| {}).unwrap();
     render_samples(&scene, &s, &mut wide, 2, 3, &|_| {}).unwrap();
-    let scalar = scene.without_wavefront();
+    let scalar = with_backend(&s, Backend::Scalar);
     let mut one = Film::new(35, 29);
-    render_samples(&scalar, &s, &mut one, 0, 5, &|_| {}).unwrap();
+    render_samples(&scene, &scalar, &mut one, 0, 5, &|_| {}).unwrap();
     assert_eq!(wide, one);
 }
 

@@ -10,6 +10,19 @@ use crate::sampler::Sampler;
 use crate::scene::Scene;
 use crate::Color;
 
+/// Direct lighting ready for a scene.
+pub struct DirectLighting<'a> {
+    pub scene: &'a Scene,
+    pub params: IntegratorParams,
+}
+
+impl super::Integrator for DirectLighting<'_> {
+    #[inline]
+    fn li(&self, ray: Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Color {
+        super::li(self.scene, ray, sampler, &self.params, stats)
+    }
+}
+
 /// Specular bounces followed before giving up (a ray trapped by total internal reflection).
 const MAX_SPECULAR_CHAIN: u32 = 64;
 

@@ -8,6 +8,19 @@
 //!   final gathering into a global map.
 //! - [`sppm`]: stochastic progressive photon mapping (Hachisuka and Jensen 2009), its own
 //!   whole-image driver ([`sppm::render_sppm`]).
+//!
+//! # The seam
+//!
+//! The render loop ([`crate::render`]), the progressive driver, `--pass`, `--resume` and
+//! `--time` all render through one interface, [`Integrator`]: an estimator made ready for one
+//! scene and one set of render settings (its photon maps built, its backend chosen) that
+//! fills a tile's pixels with samples. [`prepare`] is the one place that maps an
+//! [`IntegratorKind`] to its integrator; a new integrator is a type implementing the trait
+//! and an arm there. Each camera sample's value depends only on (seed, pixel, sample index),
+//! which is what lets any split of the samples give the same film. SPPM's passes depend on
+//! each other (each shrinks the radii of the last), so it is not an [`Integrator`] but a
+//! whole-image driver; estimators that add to any pixel (light tracing, bidirectional
+//! methods) splat into [`crate::film::Film::splat`].
 
 pub mod direct;
 mod nee;
@@ -17,7 +30,11 @@ pub mod sppm;
 #[cfg(target_arch = "x86_64")]
 pub mod wavefront;
 
+use crate::camera::Camera;
+use crate::film::PixelSums;
+use crate::geometry::Ray;
 use crate::material::sampling::power_heuristic;
+use crate::render::{Backend, RenderError, RenderSettings, RenderStats, TilePixel};
 use crate::sampler::Sampler;
 use crate::scene::{Interaction, Scene};
 use crate::Color;
@@ -126,6 +143,73 @@ impl Default for IntegratorParams {
             specular_chain: true,
             photon: PhotonParams::default(),
         }
+    }
+}
+
+/// An estimator of the radiance along camera rays, ready to render one scene with one set of
+/// render settings (see the module documentation).
+pub trait Integrator: Sync {
+    /// Radiance along a camera ray, from the sample's own random stream.
+    fn li(&self, ray: Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Color;
+
+    /// Renders a tile's samples (`pixels[k].samples` of pixel k, added to `sums[k]`) some
+    /// other way than one [`Integrator::li`] at a time, with the same values; false leaves
+    /// them to the render loop, which calls `li` sample by sample.
+    fn render_tile(
+        &self,
+        _camera: &Camera,
+        _pixels: &[TilePixel],
+        _sums: &mut [PixelSums],
+        _stats: &mut RenderStats,
+    ) -> bool {
+        false
+    }
+
+    /// What making it ready took (photons stored, their memory and time), counted once in
+    /// the render's statistics.
+    fn setup_stats(&self) -> RenderStats {
+        RenderStats::default()
+    }
+}
+
+/// The integrator that `s` names, ready for `scene`: the one registry of integrators.
+/// `--integrator sppm` has its own driver and is refused here.
+pub fn prepare<'a>(
+    scene: &'a Scene,
+    s: &'a RenderSettings,
+) -> Result<Box<dyn Integrator + 'a>, RenderError> {
+    Ok(match s.params.kind {
+        IntegratorKind::Path => Box::new(path::PathTracer::new(scene, s)?),
+        IntegratorKind::Direct => {
+            no_lanes(s)?;
+            Box::new(direct::DirectLighting {
+                scene,
+                params: s.params,
+            })
+        }
+        IntegratorKind::Photon => {
+            no_lanes(s)?;
+            Box::new(photon::PhotonMapping::new(scene, s)?)
+        }
+        IntegratorKind::Sppm => {
+            return Err(RenderError::Unsupported(
+                "sppm renders whole-image iterations of its own (render::render), not \
+                 samples per pixel"
+                    .into(),
+            ))
+        }
+    })
+}
+
+/// Refuses a wide backend asked for an integrator that traces one path at a time.
+fn no_lanes(s: &RenderSettings) -> Result<(), RenderError> {
+    match s.backend {
+        Backend::Auto | Backend::Scalar => Ok(()),
+        b => Err(RenderError::Unsupported(format!(
+            "--backend {} runs the path tracer only, not --integrator {}",
+            b.name(),
+            s.params.kind.name()
+        ))),
     }
 }
 

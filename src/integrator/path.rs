@@ -2,11 +2,72 @@
 //! ch. 9; the structure follows pbrt-v4's `PathIntegrator` and Mitsuba 3's `path`).
 
 use super::{emitted, escaped, sample_lights, IntegratorParams, RayStats, RussianRoulette};
+use crate::camera::Camera;
+use crate::film::PixelSums;
 use crate::geometry::{Frame, Ray};
 use crate::material::TransportMode;
+use crate::render::{Backend, RenderError, RenderSettings, RenderStats, TilePixel};
 use crate::sampler::Sampler;
 use crate::scene::Scene;
 use crate::Color;
+
+/// The path tracer ready for a scene: one path at a time, or sixteen at a time where the
+/// settings' backend, the scene and the CPU allow ([`super::wavefront`]), with the same
+/// values either way.
+pub struct PathTracer<'a> {
+    scene: &'a Scene,
+    params: IntegratorParams,
+    #[cfg(target_arch = "x86_64")]
+    wavefront: Option<super::wavefront::Wavefront<'a>>,
+}
+
+impl<'a> PathTracer<'a> {
+    /// Refuses a wide backend that the CPU or the scene cannot run (`Auto` falls back).
+    pub fn new(scene: &'a Scene, s: &RenderSettings) -> Result<Self, RenderError> {
+        #[cfg(target_arch = "x86_64")]
+        let wavefront = super::wavefront::Wavefront::new(scene, s);
+        #[cfg(target_arch = "x86_64")]
+        let lanes = wavefront.is_some();
+        #[cfg(not(target_arch = "x86_64"))]
+        let lanes = false;
+        if matches!(s.backend, Backend::Avx512 | Backend::Avx2) && !lanes {
+            return Err(RenderError::Unsupported(format!(
+                "--backend {} needs a CPU with it and a scene the wavefront takes (see \
+                 docs/performance.md); --backend auto picks what runs",
+                s.backend.name()
+            )));
+        }
+        Ok(PathTracer {
+            scene,
+            params: s.params,
+            #[cfg(target_arch = "x86_64")]
+            wavefront,
+        })
+    }
+}
+
+impl super::Integrator for PathTracer<'_> {
+    #[inline]
+    fn li(&self, ray: Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Color {
+        super::li(self.scene, ray, sampler, &self.params, stats)
+    }
+
+    fn render_tile(
+        &self,
+        camera: &Camera,
+        pixels: &[TilePixel],
+        sums: &mut [PixelSums],
+        stats: &mut RenderStats,
+    ) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(w) = &self.wavefront {
+            w.render_tile(camera, pixels, sums, stats);
+            return true;
+        }
+        let _ = (camera, pixels, sums, stats);
+        false
+    }
+}
 
 #[inline(always)]
 pub fn li(

@@ -19,6 +19,7 @@ use crate::material::{Material, TransportMode};
 use crate::photon::{
     precomputed_radiance, radiance_estimate, visibility, PhotonMaps, ShadingPoint, Visibility,
 };
+use crate::render::{RenderError, RenderSettings, RenderStats};
 use crate::sampler::Sampler;
 use crate::scene::{Interaction, Scene};
 use crate::Color;
@@ -29,8 +30,8 @@ const MAX_SPECULAR_CHAIN: u32 = 32;
 const SHADOW_K: usize = 16;
 
 /// The maps and the search radii, built once per render.
-pub struct PhotonContext<'a> {
-    pub maps: &'a PhotonMaps,
+pub struct PhotonContext {
+    pub maps: PhotonMaps,
     /// Largest search radius of the global, caustic and shadow-photon estimates.
     pub r_global: f32,
     pub r_caustic: f32,
@@ -39,8 +40,8 @@ pub struct PhotonContext<'a> {
     pub use_shadow_photons: bool,
 }
 
-impl<'a> PhotonContext<'a> {
-    pub fn new(scene: &Scene, maps: &'a PhotonMaps) -> Self {
+impl PhotonContext {
+    pub fn new(scene: &Scene, maps: PhotonMaps) -> Self {
         let d = crate::photon::scene_diagonal(scene);
         PhotonContext {
             maps,
@@ -48,6 +49,47 @@ impl<'a> PhotonContext<'a> {
             r_caustic: 0.05 * d,
             r_shadow: 0.02 * d,
             use_shadow_photons: scene.lights.others.is_empty(),
+        }
+    }
+}
+
+/// Photon mapping ready for a scene: its maps traced and built (deterministically from the
+/// seed, so every pass, machine and resumed render sees the same maps).
+pub struct PhotonMapping<'a> {
+    scene: &'a Scene,
+    params: IntegratorParams,
+    ctx: PhotonContext,
+}
+
+impl<'a> PhotonMapping<'a> {
+    pub fn new(scene: &'a Scene, s: &RenderSettings) -> Result<Self, RenderError> {
+        crate::render::camera_for(scene, s)?;
+        let maps = crate::render::with_threads(s, || PhotonMaps::build(scene, &s.params, s.seed))?;
+        Ok(PhotonMapping {
+            scene,
+            params: s.params,
+            ctx: PhotonContext::new(scene, maps),
+        })
+    }
+}
+
+impl super::Integrator for PhotonMapping<'_> {
+    fn li(&self, ray: Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Color {
+        li(self.scene, &self.ctx, ray, sampler, &self.params, stats)
+    }
+
+    fn setup_stats(&self) -> RenderStats {
+        let maps = &self.ctx.maps;
+        RenderStats {
+            photons_stored: (maps.global.len() + maps.caustic.len() + maps.shadow.len()) as u64,
+            photon_bytes: maps.memory_bytes() as u64,
+            photon_time: maps.build_time,
+            elapsed: maps.build_time,
+            rays: RayStats {
+                rays: maps.rays,
+                shadow_rays: 0,
+            },
+            ..Default::default()
         }
     }
 }

@@ -215,8 +215,6 @@ impl Scene {
             textures: desc.textures,
             cameras: desc.cameras,
             desc_settings: desc.settings,
-            wavefront_allowed: true,
-            wavefront_avx512: true,
         }
     }
 }

@@ -124,12 +124,6 @@ pub struct Scene {
     pub desc_settings: desc::FileSettings,
     /// How long each phase of `Scene::build` took.
     pub build_times: crate::accel::BuildTimes,
-    /// Whether the path tracer may run sixteen paths at a time where the scene allows
-    /// ([`crate::integrator::wavefront`]); cleared by [`Scene::without_wavefront`].
-    pub(crate) wavefront_allowed: bool,
-    /// Whether the wavefront may use AVX-512 where the CPU has it; cleared by
-    /// [`Scene::without_avx512_wavefront`].
-    pub(crate) wavefront_avx512: bool,
 }
 
 impl Scene {
@@ -457,22 +451,6 @@ impl Scene {
         {
             self.flat = None;
         }
-        self
-    }
-
-    /// The scene with every path traced one at a time (`integrator::path`), even where the
-    /// wavefront would take it: for the tests and benchmarks, which compare both.
-    #[doc(hidden)]
-    pub fn without_wavefront(mut self) -> Scene {
-        self.wavefront_allowed = false;
-        self
-    }
-
-    /// The scene with the wavefront on AVX2 even where the CPU has AVX-512: for the tests,
-    /// which compare both of its backends with the path traced one at a time.
-    #[doc(hidden)]
-    pub fn without_avx512_wavefront(mut self) -> Scene {
-        self.wavefront_avx512 = false;
         self
     }
 

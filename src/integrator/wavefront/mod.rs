@@ -46,7 +46,7 @@ use crate::camera::Camera;
 use crate::film::PixelSums;
 use crate::integrator::{IntegratorKind, RussianRoulette};
 use crate::material::Bsdf;
-use crate::render::{RenderSettings, RenderStats, TilePixel};
+use crate::render::{self, RenderSettings, RenderStats, TilePixel};
 use crate::sampler::SamplerKind;
 use crate::scene::{Scene, META_EMITTER, META_MATERIAL, SPHERE};
 
@@ -101,15 +101,23 @@ enum Backend {
 }
 
 impl Backend {
-    /// The best this CPU runs, if any (AVX-512 only if `avx512`).
-    fn detect(avx512: bool) -> Option<Backend> {
+    /// The lanes the render settings ask for, if this CPU runs them: with
+    /// [`render::Backend::Auto`] the best it has.
+    fn detect(asked: render::Backend) -> Option<Backend> {
+        let (avx512, avx2) = match asked {
+            render::Backend::Auto => (true, true),
+            render::Backend::Scalar => (false, false),
+            render::Backend::Avx512 => (true, false),
+            render::Backend::Avx2 => (false, true),
+        };
         if avx512
             && std::arch::is_x86_feature_detected!("avx512f")
             && std::arch::is_x86_feature_detected!("avx512dq")
             && std::arch::is_x86_feature_detected!("bmi2")
         {
             Some(Backend::Avx512)
-        } else if std::arch::is_x86_feature_detected!("avx2")
+        } else if avx2
+            && std::arch::is_x86_feature_detected!("avx2")
             && std::arch::is_x86_feature_detected!("bmi1")
             && std::arch::is_x86_feature_detected!("bmi2")
             && std::arch::is_x86_feature_detected!("popcnt")
@@ -161,10 +169,7 @@ impl<'a> Wavefront<'a> {
     /// The wavefront for rendering `scene` with `s`, if the scene, the settings and the CPU
     /// are ones it takes (see the module comment); None otherwise.
     pub fn new(scene: &'a Scene, s: &RenderSettings) -> Option<Wavefront<'a>> {
-        if !scene.wavefront_allowed {
-            return None;
-        }
-        let backend = Backend::detect(scene.wavefront_avx512)?;
+        let backend = Backend::detect(s.backend)?;
         let p = &s.params;
         // (No shadow ray at all is refused by the settings; through the library it would
         // make `sample_lights` divide by zero, which the lanes do not copy.)
