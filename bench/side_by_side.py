@@ -17,8 +17,10 @@ and render it with the same resolution, samples per pixel, path length and threa
    Mitsuba render at --ref-spp, cached in bench/out/refs/). Mitsuba renders the base spp with
    `independent`, `multijitter` and `ldsampler` (its fastest variant); the one with the lowest
    RMSE sets the target RMSE and Mitsuba's time. mcrt, with `independent` and with `sobol`,
-   searches the fewest spp that reach that RMSE (a first guess from its error at the base spp,
-   then steps of an eighth); its time is that render's. The ratio takes mcrt's faster sampler.
+   renders the base spp too; with each sampler whose time projected to the target (RMSE ∝
+   1/√spp) is within a third of the best projection, it searches the fewest spp that reach
+   that RMSE (a first guess from the projection, then steps of an eighth); its time is that
+   render's. The ratio takes mcrt's faster sampler.
 
 usage: .venv/bin/python bench/side_by_side.py [--quick] [--threads N] [--scenes a,b,...]
 Needs: pip install mitsuba numpy; Debian's libllvm19 for Mitsuba's LLVM variant; cargo (the
@@ -128,9 +130,11 @@ def mcrt_render(xml, sampler, seed, threads):
 
 
 def jit_compiles():
-    """Kernels compiled (not found in Dr.Jit's caches) since the last call."""
-    return sum(1 for k in dr.kernel_history()
-               if k.get("type") == dr.KernelType.JIT and not k.get("cache_hit", 1))
+    """Kernels compiled (not found in Dr.Jit's caches) since the last call, and the
+    milliseconds that took."""
+    ks = [k for k in dr.kernel_history()
+          if k.get("type") == dr.KernelType.JIT and not k.get("cache_hit", 1)]
+    return len(ks), sum(k.get("codegen_time", 0) + k.get("backend_time", 0) for k in ks)
 
 
 def mitsuba_render(variant, xml, seed):
@@ -149,15 +153,17 @@ def mitsuba_render(variant, xml, seed):
         dr.sync_thread()
         return img
 
-    render(1, seed + 7919)  # warm-up, evaluated
+    render(4, seed + 7919)  # warm-up, evaluated (4: square and a power of two, as ldsampler wants)
     for _ in range(2):
         jit_compiles()
         t = time.perf_counter()
         img = render(spp, seed)
         secs = time.perf_counter() - t
-        if not variant.startswith("llvm") or jit_compiles() == 0:
+        n, ms = jit_compiles()
+        if not variant.startswith("llvm") or n == 0:
             break
-        print(f"  ({variant} compiled during the timed render; timing it again)", flush=True)
+        print(f"  ({variant} compiled {n} kernel(s) in {ms:.0f} ms during the timed render, "
+              f"{secs:.2f} s; timing it again)", flush=True)
     return secs, load, img[:, :, :3]
 
 
@@ -320,13 +326,24 @@ def main():
             xml = scene_xml(f"{name}-mcrt-{s}", src, ERR_RES, base_spp, s)
             secs, _, img = mcrt_render(xml, s, SEED_ERR, a.threads)
             e0 = rmse(img, REF[name])
-            found = mcrt_equal_error(name, src, s, target, base_spp, e0, a.threads)
+            # The time this sampler would need at the target, if RMSE ∝ 1/√spp.
             err["mcrt"][s] = {"base rmse": e0, "base s": secs,
-                              "equal error": None if found is None else
-                              {"spp": found[0], "s": found[1], "rmse": found[2]}}
-            print(f"  mcrt {s}: RMSE {e0:.5f} at {base_spp} spp in {secs:.2f} s; "
-                  + (f"RMSE {found[2]:.5f} at {found[0]} spp in {found[1]:.2f} s" if found
-                     else "did not reach the target RMSE"), flush=True)
+                              "projected s": secs * (e0 / target) ** 2, "equal error": None}
+        # Search with each sampler that could be the faster: a sampler projected to need a
+        # third more time than the best is not searched (its projection is printed).
+        fastest = min(e["projected s"] for e in err["mcrt"].values())
+        for s, e in err["mcrt"].items():
+            found = None
+            if e["projected s"] <= 1.33 * fastest:
+                found = mcrt_equal_error(name, src, s, target, base_spp, e["base rmse"], a.threads)
+            if found:
+                e["equal error"] = {"spp": found[0], "s": found[1], "rmse": found[2]}
+            print(f"  mcrt {s}: RMSE {e['base rmse']:.5f} at {base_spp} spp in "
+                  f"{e['base s']:.2f} s; " + (
+                      f"RMSE {found[2]:.5f} at {found[0]} spp in {found[1]:.2f} s" if found else
+                      f"projected {e['projected s']:.2f} s at the target, not searched"
+                      if e["projected s"] > 1.33 * fastest else
+                      "did not reach the target RMSE"), flush=True)
         reached = [s for s in MCRT_SAMPLERS if err["mcrt"][s]["equal error"]]
         if reached:
             mc_s = min(reached, key=lambda s: err["mcrt"][s]["equal error"]["s"])
