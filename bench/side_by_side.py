@@ -1,140 +1,367 @@
 #!/usr/bin/env python3
 """Side-by-side benchmark of mcrt and Mitsuba 3 on one machine, in one run.
 
-For the Cornell box and the TNCG15 room it renders, with the same resolution, samples per
-pixel, path length and thread count:
-  * mcrt (target/release/mcrt, built first with `cargo build --release`),
-  * Mitsuba 3 `llvm_ad_rgb` and `scalar_rgb`, when the `mitsuba` Python package is installed
-    (each timed on a second, warm render, so that JIT compilation is not counted),
-and prints samples/s for each and the ratios. Then it measures time to equal error: the
-RMSE against the reference in tests/data/refs that Mitsuba `llvm_ad_rgb` reaches at 256 spp,
-and the wall time mcrt needs to reach it (mcrt renders with its Sobol sampler; its spp is
-found by doubling, then bisection, and the reported time is the measured one of that render).
+Both renderers read the same Mitsuba 3 XML file for each scene (the script writes a copy with
+the film size, sample count and sampler set, and file names made absolute, to bench/out/run/)
+and render it with the same resolution, samples per pixel, path length and thread count.
 
-usage: python3 bench/side_by_side.py [--quick] [--threads N]
+1. Rate: samples per second of the render itself (scene loading and the acceleration
+   structure's build are reported apart), both with independent random numbers. mcrt's time
+   is the one it prints for its render; Mitsuba's is that of `mi.render` evaluated to a NumPy
+   array, after a warm-up render that is itself evaluated (Dr.Jit is lazy: an unevaluated
+   warm-up would run inside the timed render) and after which the timed render must compile no
+   kernel (checked in Dr.Jit's kernel history; otherwise it is timed again). Mitsuba's
+   `llvm_ad_rgb` and `scalar_rgb` are both measured and the faster one is Mitsuba's figure.
+2. Time to equal error, each renderer with its best sampler: RMSE against a reference
+   (tests/data/refs for the Cornell box and the TNCG15 room; for the generated scenes a
+   Mitsuba render at --ref-spp, cached in bench/out/refs/). Mitsuba renders the base spp with
+   `independent`, `multijitter` and `ldsampler` (its fastest variant); the one with the lowest
+   RMSE sets the target RMSE and Mitsuba's time. mcrt, with `independent` and with `sobol`,
+   renders the base spp too; with each sampler whose time projected to the target (RMSE ∝
+   1/√spp) is within a third of the best projection, it searches the fewest spp that reach
+   that RMSE (a first guess from the projection, then steps of an eighth); its time is that
+   render's. The ratio takes mcrt's faster sampler.
+
+usage: .venv/bin/python bench/side_by_side.py [--quick] [--threads N] [--scenes a,b,...]
+Needs: pip install mitsuba numpy; Debian's libllvm19 for Mitsuba's LLVM variant; cargo (the
+script runs `cargo build --release` unless --no-build). The generated scenes are made by
+bench/make_scenes.py when missing.
 """
-import argparse, glob, json, os, subprocess, sys, tempfile, time
+import argparse
+import glob
+import hashlib
+import json
+import os
+import platform
+import re
+import subprocess
+import sys
+import time
+import xml.etree.ElementTree as ET
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-for _llvm in glob.glob("/usr/lib/*/libLLVM.so.19*")[:1]:
+OUT = os.path.join(ROOT, "bench", "out")
+MCRT = os.path.join(ROOT, "target", "release", "mcrt")
+for _llvm in sorted(glob.glob("/usr/lib/*/libLLVM.so.19*"))[:1]:
     os.environ.setdefault("DRJIT_LIBLLVM_PATH", _llvm)
+
+import numpy as np  # noqa: E402
+
 try:
-    import mitsuba as mi
-    import numpy as np
+    import mitsuba as mi  # noqa: E402
+    import drjit as dr  # noqa: E402
 except ImportError:
-    mi = None
-    import numpy as np
+    sys.exit("the benchmark needs Mitsuba 3: pip install mitsuba numpy (see docs/performance.md)")
 
-MCRT = os.path.join(ROOT, "target/release/mcrt")
-
+GENERATED = os.path.join(OUT, "scenes")
+# name: (XML scene, reference EXR at ERR_RES² or None to render one, resolution of the rate test)
 SCENES = {
-    # name: (mcrt scene, mitsuba scene, reference (256²), resolution of the rate test, depth)
-    "cornell": ("scenes/cornell-box.toml", "tests/data/mitsuba/cornell-box.xml",
-                "tests/data/refs/cornell-box.exr", 512, 8),
-    "tncg15": ("scenes/tncg15.toml", "tests/data/mitsuba/hexroom/hexroom.xml",
-               "tests/data/refs/hexroom-eye1.exr", 256, -1),
+    "cornell": ("tests/data/mitsuba/cornell-box.xml", "tests/data/refs/cornell-box.exr", 512),
+    "tncg15": ("tests/data/mitsuba/hexroom/hexroom.xml", "tests/data/refs/hexroom-eye1.exr", 256),
+    "bunny-box": (os.path.join(GENERATED, "bunny-box.xml"), None, 256),
+    "gallery": (os.path.join(GENERATED, "gallery.xml"), None, 256),
 }
+TITLES = {
+    "cornell": "Cornell box",
+    "tncg15": "TNCG15 room",
+    "bunny-box": "Cornell box with the bunny",
+    "gallery": "gallery (850 k triangles)",
+}
+ERR_RES = 256  # the references' resolution
+MITSUBA_SAMPLERS = ("independent", "multijitter", "ldsampler")
+MCRT_SAMPLERS = ("independent", "sobol")
+SEED_RATE, SEED_ERR, SEED_REF = 0, 1, 1_000_000
+
+
+def scene_xml(name, src, res, spp, sampler):
+    """Writes bench/out/run/NAME.xml: SRC with the film at RES², SPP samples of SAMPLER and
+    file names made absolute, so that the copy loads from anywhere in both renderers."""
+    tree = ET.parse(src)
+    base = os.path.dirname(os.path.abspath(src))
+    for el in tree.getroot().iter():
+        key = "filename" if el.tag == "include" else "value"
+        if el.tag == "include" or (el.tag == "string" and el.get("name") == "filename"):
+            v = el.get(key)
+            if v and "$" not in v and not os.path.isabs(v):
+                el.set(key, os.path.normpath(os.path.join(base, v)))
+    sensors = tree.getroot().findall("sensor")
+    if len(sensors) != 1:
+        sys.exit(f"{src}: the benchmark needs exactly one sensor at the top level")
+    film, smp = sensors[0].find("film"), sensors[0].find("sampler")
+    for el in film.findall("integer"):
+        if el.get("name") in ("width", "height"):
+            el.set("value", str(res))
+    smp.set("type", sampler)
+    for el in smp.findall("integer"):
+        if el.get("name") == "sample_count":
+            el.set("value", str(spp))
+    os.makedirs(os.path.join(OUT, "run"), exist_ok=True)
+    out = os.path.join(OUT, "run", f"{name}.xml")
+    tree.write(out, encoding="utf-8", xml_declaration=True)
+    return out
 
 
 def read_exr(path):
-    if mi is not None:
-        return np.array(mi.Bitmap(path), dtype=np.float64)[:, :, :3]
-    raise SystemExit("reading EXR needs the mitsuba package")
+    return np.array(mi.Bitmap(path), dtype=np.float64)[:, :, :3]
 
 
 def rmse(a, b):
     return float(np.sqrt(np.mean((a - b) ** 2)))
 
 
-def mcrt_render(scene, res, spp, depth, threads, sampler="independent", out=None):
-    out = out or tempfile.mktemp(suffix=".exr")
-    cmd = [MCRT, "render", os.path.join(ROOT, scene), "-o", out, "--width", str(res),
-           "--height", str(res), "--spp", str(spp), "--max-depth", str(depth),
-           "--threads", str(threads), "--sampler", sampler, "--camera"]
-    cmd.append("eye1" if "tncg15" in scene else "main")
-    t = time.perf_counter()
-    subprocess.run(cmd, check=True, capture_output=True)
-    return time.perf_counter() - t, out
+def mcrt_render(xml, sampler, seed, threads):
+    """Renders with mcrt; returns (render seconds, load seconds, image)."""
+    out = xml[:-4] + ".mcrt.exr"
+    cmd = [MCRT, "render", xml, "-o", out, "--threads", str(threads), "--sampler", sampler,
+           "--seed", str(seed)]
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    if p.returncode != 0:
+        sys.exit(f"{' '.join(cmd)} failed:\n{p.stderr}")
+    m = re.search(r"(\d+)x(\d+) at (\d+) spp .*loaded in ([0-9.]+) s\) in ([0-9.]+) s", p.stderr)
+    if not m:
+        sys.exit(f"mcrt printed no timing line:\n{p.stderr}")
+    img = read_exr(out)
+    sensor = ET.parse(xml).getroot().find("sensor")
+    asked = [sensor.find(f"film/integer[@name='{k}']").get("value") for k in ("width", "height")]
+    asked.append(sensor.find("sampler/integer[@name='sample_count']").get("value"))
+    if list(m.group(1, 2, 3)) != asked or (int(m.group(2)), int(m.group(1))) != img.shape[:2]:
+        sys.exit(f"mcrt rendered {m.group(0)}, not what {xml} asks")
+    return float(m.group(5)), float(m.group(4)), img
 
 
-def mitsuba_render(variant, scene, res, spp, depth, threads):
+def jit_compiles():
+    """Kernels compiled (not found in Dr.Jit's caches) since the last call, and the
+    milliseconds that took."""
+    ks = [k for k in dr.kernel_history()
+          if k.get("type") == dr.KernelType.JIT and not k.get("cache_hit", 1)]
+    return len(ks), sum(k.get("codegen_time", 0) + k.get("backend_time", 0) for k in ks)
+
+
+def mitsuba_render(variant, xml, seed):
+    """Loads and renders with Mitsuba; returns (render seconds, load seconds, image). The
+    render is timed warm: a one-sample warm-up compiles the kernels and is evaluated first.
+    (`mi.render(spp=...)` sets the sampler's count for good, so every call passes it.)"""
     mi.set_variant(variant)
     mi.set_log_level(mi.LogLevel.Warn)
-    path = os.path.join(ROOT, scene)
-    text = open(path).read()
-    # Both files render 256×256 (hexroom.xml through its `res` default); change the film.
-    text = text.replace('name="width" value="256"', f'name="width" value="{res}"')
-    text = text.replace('name="height" value="256"', f'name="height" value="{res}"')
-    text = text.replace('name="res" value="256"', f'name="res" value="{res}"')
-    s = mi.load_string(text.replace('filename" value="', 'filename" value="' + os.path.dirname(path) + "/"))
-    integ = mi.load_dict({"type": "path", "max_depth": depth})
-    assert list(s.sensors()[0].film().size()) == [res, res]
-    mi.render(s, integrator=integ, spp=spp, seed=99)  # warm-up: JIT compilation
     t = time.perf_counter()
-    img = np.array(mi.render(s, integrator=integ, spp=spp, seed=0), dtype=np.float64)[:, :, :3]
-    return time.perf_counter() - t, img
+    scene = mi.load_file(xml)
+    load = time.perf_counter() - t
+    spp = scene.sensors()[0].sampler().sample_count()
+
+    def render(spp_, seed_):
+        img = np.array(mi.render(scene, spp=spp_, seed=seed_), dtype=np.float64)
+        dr.sync_thread()
+        return img
+
+    render(4, seed + 7919)  # warm-up, evaluated (4: square and a power of two, as ldsampler wants)
+    for _ in range(2):
+        jit_compiles()
+        t = time.perf_counter()
+        img = render(spp, seed)
+        secs = time.perf_counter() - t
+        n, ms = jit_compiles()
+        if not variant.startswith("llvm") or n == 0:
+            break
+        print(f"  ({variant} compiled {n} kernel(s) in {ms:.0f} ms during the timed render, "
+              f"{secs:.2f} s; timing it again)", flush=True)
+    return secs, load, img[:, :, :3]
+
+
+def reference(name, src, ref_spp, variant):
+    """The cached Mitsuba reference of a generated scene at ERR_RES², or renders it (in passes
+    of 256 spp, so that the LLVM variant's wavefront stays small)."""
+    key = hashlib.sha1(open(src, "rb").read()).hexdigest()[:10]
+    path = os.path.join(OUT, "refs", f"{name}-{ERR_RES}-{ref_spp}-{key}.exr")
+    if os.path.exists(path):
+        return read_exr(path)
+    print(f"  rendering the reference ({ref_spp} spp with {variant}; cached in {path})", flush=True)
+    step = min(256, ref_spp)
+    xml = scene_xml(name + "-ref", src, ERR_RES, step, "independent")
+    mi.set_variant(variant)
+    scene = mi.load_file(xml)
+    acc, done = 0.0, 0
+    while done < ref_spp:
+        n = min(step, ref_spp - done)
+        acc = acc + n * np.array(mi.render(scene, spp=n, seed=SEED_REF + done), dtype=np.float64)
+        done += n
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    mi.Bitmap((acc / done).astype(np.float32)).write(path)
+    return read_exr(path)[:, :, :3]
+
+
+def mcrt_equal_error(name, src, sampler, target, base_spp, base_err, threads):
+    """The fewest spp (to within an eighth) at which mcrt's RMSE reaches TARGET: a first guess
+    from its error at the base spp (RMSE ∝ 1/√spp), then steps of an eighth up or down.
+    Returns (spp, render seconds, RMSE) of the render that reached it, or None."""
+    def at(spp):
+        secs, _, img = mcrt_render(scene_xml(f"{name}-mcrt-{sampler}", src, ERR_RES, spp, sampler),
+                                   sampler, SEED_ERR, threads)
+        return spp, secs, rmse(img, REF[name])
+
+    spp = max(4, int(round(base_spp * (base_err / target) ** 2)))
+    found, tried = None, at(spp)
+    going_up = tried[2] > target
+    for _ in range(16):
+        if tried[2] <= target:
+            found = tried
+            if going_up:
+                break
+        elif not going_up:
+            break
+        spp = max(1, int(round(spp * (9 / 8 if going_up else 7 / 8))))
+        if spp > 32 * base_spp or (not going_up and spp == tried[0]):
+            break
+        tried = at(spp)
+    return found
+
+
+REF = {}
+
+
+def validate(names, res, spp, threads):
+    """Both renderers on each scene at RES², SPP: the relative difference of the images'
+    means, and how many standard errors it is (from the pixels' differences, which are
+    independent across pixels with independent samplers and distinct seeds)."""
+    print(f"| scene | Mitsuba mean | mcrt mean | mcrt / Mitsuba − 1 | standard errors |\n"
+          f"|---|---|---|---|---|")
+    for name in names:
+        src = os.path.join(ROOT, SCENES[name][0])
+        xml = scene_xml(name + "-validate", src, res, spp, "independent")
+        _, _, a = mcrt_render(xml, "independent", SEED_RATE, threads)
+        _, _, b = mitsuba_render("llvm_ad_rgb", xml, SEED_ERR)
+        d = (a - b).mean(axis=2).ravel()
+        se = d.std(ddof=1) / np.sqrt(d.size)
+        print(f"| {TITLES[name]}, {res}², {spp} spp | {b.mean():.5f} | {a.mean():.5f} | "
+              f"{a.mean() / b.mean() - 1:+.4f} | {d.mean() / se:+.2f} |", flush=True)
+
+
+def cpu_line():
+    model, flags = platform.processor() or "unknown CPU", set()
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+            elif line.startswith("flags"):
+                flags = set(line.split(":", 1)[1].split())
+    except OSError:
+        pass
+    shown = [f for f in ("sse4_2", "avx", "avx2", "fma", "bmi2", "avx512f", "avx512dq",
+                         "avx512bw", "avx512vl", "avx512vbmi") if f in flags]
+    return f"{model}, {os.cpu_count()} logical CPUs; flags: {' '.join(shown) or 'none of interest'}"
 
 
 def main():
-    ap = argparse.ArgumentParser()
+    ap = argparse.ArgumentParser(description="mcrt against Mitsuba 3, side by side")
     ap.add_argument("--quick", action="store_true", help="fewer samples (a smoke test)")
     ap.add_argument("--threads", type=int, default=os.cpu_count())
+    ap.add_argument("--scenes", default=",".join(SCENES), help="comma-separated subset of "
+                    + ", ".join(SCENES))
+    ap.add_argument("--ref-spp", type=int, help="spp of the generated scenes' references "
+                    "(default 4096; 1024 with --quick)")
+    ap.add_argument("--no-build", action="store_true", help="do not run cargo build --release")
+    ap.add_argument("--validate", type=int, metavar="SPP", help="instead of timing, compare "
+                    "the two renderers' image means at --validate-res² with SPP samples")
+    ap.add_argument("--validate-res", type=int, default=64)
+    ap.add_argument("--json", default=os.path.join(OUT, "side-by-side.json"))
     a = ap.parse_args()
-    spp_rate = 16 if a.quick else 64
-    base_spp = 64 if a.quick else 256
-    if mi is not None:
-        mi.set_variant("scalar_rgb")
-        import drjit as dr
-        dr.set_thread_count(a.threads)
-    print(f"machine: {os.cpu_count()} cores, threads {a.threads}; mitsuba "
-          f"{mi.__version__ if mi else 'not installed'}")
+    names = [n for n in a.scenes.split(",") if n]
+    for n in names:
+        if n not in SCENES:
+            sys.exit(f"unknown scene {n!r}; known: {', '.join(SCENES)}")
+    if a.threads < 1:
+        sys.exit("--threads must be at least 1")
+    spp_rate, base_spp = (16, 64) if a.quick else (64, 256)
+    ref_spp = a.ref_spp or (1024 if a.quick else 4096)
+    if not a.no_build:
+        subprocess.run(["cargo", "build", "--release", "--quiet"], cwd=ROOT, check=True)
+    if any(SCENES[n][1] is None and not os.path.exists(SCENES[n][0]) for n in names):
+        subprocess.run([sys.executable, os.path.join(ROOT, "bench", "make_scenes.py")], check=True)
+    mi.set_variant("scalar_rgb")
+    dr.set_thread_count(a.threads)
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    if a.validate:
+        return validate(names, a.validate_res, a.validate, a.threads)
+    commit = subprocess.run(["git", "describe", "--always", "--dirty"], cwd=ROOT,
+                            capture_output=True, text=True).stdout.strip()
+    t_start = time.time()
+    print(f"machine: {cpu_line()}; {platform.system()} {platform.release()}")
+    print(f"threads {a.threads}; mcrt {commit}; Mitsuba {mi.__version__}; "
+          f"{'--quick: ' if a.quick else ''}rate at {spp_rate} spp, error at {ERR_RES}² with "
+          f"{base_spp} spp; {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}", flush=True)
     results = {}
-    for name, (msc, xsc, ref, res, depth) in SCENES.items():
-        pixels = res * res
-        r = {}
-        t, _ = mcrt_render(msc, res, spp_rate, depth, a.threads)
-        r["mcrt samples/s"] = pixels * spp_rate / t
-        if mi is not None:
-            for v in ("llvm_ad_rgb", "scalar_rgb"):
-                spp_v = spp_rate if v == "llvm_ad_rgb" else max(4, spp_rate // 8)
-                t, _ = mitsuba_render(v, xsc, res, spp_v, depth, a.threads)
-                r[f"mitsuba {v} samples/s"] = pixels * spp_v / t
-            r["ratio vs llvm_ad_rgb"] = r["mcrt samples/s"] / r["mitsuba llvm_ad_rgb samples/s"]
-            r["ratio vs scalar_rgb"] = r["mcrt samples/s"] / r["mitsuba scalar_rgb samples/s"]
-            # Time to equal error.
-            reference = read_exr(os.path.join(ROOT, ref))
-            res = 256  # the references' resolution
-            pixels = res * res
-            t_mi, img = mitsuba_render("llvm_ad_rgb", xsc, res, base_spp, depth, a.threads)
-            target = rmse(img, reference)
-            r["mitsuba llvm: spp, s, RMSE"] = (base_spp, t_mi, target)
-            lo, hi, found = 0, 8, None
-            while True:
-                t, out = mcrt_render(msc, res, hi, depth, a.threads, "sobol")
-                e = rmse(read_exr(out), reference)
-                if e <= target:
-                    found = (hi, t, e)
-                    break
-                lo, hi = hi, hi * 2
-                if hi > 64 * base_spp:
-                    break
-            while found and hi - lo > max(1, hi // 16):
-                mid = (lo + hi) // 2
-                t, out = mcrt_render(msc, res, mid, depth, a.threads, "sobol")
-                e = rmse(read_exr(out), reference)
-                if e <= target:
-                    hi, found = mid, (mid, t, e)
-                else:
-                    lo = mid
-            r["mcrt sobol: spp, s, RMSE"] = found
+    for name in names:
+        src, ref, res = SCENES[name]
+        src = os.path.join(ROOT, src)
+        r = results[name] = {"rate_res": res}
+        print(f"\n{name}:", flush=True)
+        px = res * res
+        xml = scene_xml(name + "-rate", src, res, spp_rate, "independent")
+        secs, load, _ = mcrt_render(xml, "independent", SEED_RATE, a.threads)
+        r["mcrt"] = {"samples/s": px * spp_rate / secs, "render s": secs, "load s": load}
+        for v, spp in (("llvm_ad_rgb", spp_rate), ("scalar_rgb", max(4, spp_rate // 4))):
+            xml = scene_xml(f"{name}-rate-{v}", src, res, spp, "independent")
+            secs, load, _ = mitsuba_render(v, xml, SEED_RATE)
+            r[v] = {"samples/s": px * spp / secs, "render s": secs, "load s": load, "spp": spp}
+        best_v = max(("llvm_ad_rgb", "scalar_rgb"), key=lambda v: r[v]["samples/s"])
+        r["mitsuba variant"] = best_v
+        r["rate ratio"] = r["mcrt"]["samples/s"] / r[best_v]["samples/s"]
+        print(f"  samples/s: mcrt {r['mcrt']['samples/s'] / 1e6:.3f} M (loaded in "
+              f"{r['mcrt']['load s']:.2f} s), llvm_ad_rgb {r['llvm_ad_rgb']['samples/s'] / 1e6:.3f} M, "
+              f"scalar_rgb {r['scalar_rgb']['samples/s'] / 1e6:.3f} M (loaded in "
+              f"{r['scalar_rgb']['load s']:.2f} s)", flush=True)
+
+        REF[name] = (read_exr(os.path.join(ROOT, ref)) if ref
+                     else reference(name, src, ref_spp, best_v))
+        err = r["error"] = {"mitsuba": {}, "mcrt": {}}
+        for s in MITSUBA_SAMPLERS:
+            xml = scene_xml(f"{name}-mi-{s}", src, ERR_RES, base_spp, s)
+            secs, _, img = mitsuba_render(best_v, xml, SEED_ERR)
+            err["mitsuba"][s] = {"spp": base_spp, "s": secs, "rmse": rmse(img, REF[name])}
+        mi_s = min(MITSUBA_SAMPLERS, key=lambda s: err["mitsuba"][s]["rmse"])
+        target, t_mi = err["mitsuba"][mi_s]["rmse"], err["mitsuba"][mi_s]["s"]
+        print("  Mitsuba at %d spp: %s; best %s" % (base_spp, ", ".join(
+            f"{s} RMSE {e['rmse']:.5f} in {e['s']:.2f} s" for s, e in err["mitsuba"].items()),
+            mi_s), flush=True)
+        for s in MCRT_SAMPLERS:
+            xml = scene_xml(f"{name}-mcrt-{s}", src, ERR_RES, base_spp, s)
+            secs, _, img = mcrt_render(xml, s, SEED_ERR, a.threads)
+            e0 = rmse(img, REF[name])
+            # The time this sampler would need at the target, if RMSE ∝ 1/√spp.
+            err["mcrt"][s] = {"base rmse": e0, "base s": secs,
+                              "projected s": secs * (e0 / target) ** 2, "equal error": None}
+        # Search with each sampler that could be the faster: a sampler projected to need a
+        # third more time than the best is not searched (its projection is printed).
+        fastest = min(e["projected s"] for e in err["mcrt"].values())
+        for s, e in err["mcrt"].items():
+            found = None
+            if e["projected s"] <= 1.33 * fastest:
+                found = mcrt_equal_error(name, src, s, target, base_spp, e["base rmse"], a.threads)
             if found:
-                r["time to equal error vs llvm_ad_rgb"] = found[1] / t_mi
-        results[name] = r
-        print(f"\n{name} (rate at {SCENES[name][3]}², error at 256², max depth {depth}):")
-        for k, v in r.items():
-            print(f"  {k}: {v if not isinstance(v, float) else round(v, 4)}")
-    with open(os.path.join(tempfile.gettempdir(), "mcrt-side-by-side.json"), "w") as f:
+                e["equal error"] = {"spp": found[0], "s": found[1], "rmse": found[2]}
+            print(f"  mcrt {s}: RMSE {e['base rmse']:.5f} at {base_spp} spp in "
+                  f"{e['base s']:.2f} s; " + (
+                      f"RMSE {found[2]:.5f} at {found[0]} spp in {found[1]:.2f} s" if found else
+                      f"projected {e['projected s']:.2f} s at the target, not searched"
+                      if e["projected s"] > 1.33 * fastest else
+                      "did not reach the target RMSE"), flush=True)
+        reached = [s for s in MCRT_SAMPLERS if err["mcrt"][s]["equal error"]]
+        if reached:
+            mc_s = min(reached, key=lambda s: err["mcrt"][s]["equal error"]["s"])
+            r["time ratio"] = err["mcrt"][mc_s]["equal error"]["s"] / t_mi
+            r["samplers"] = (mc_s, mi_s)
+    with open(a.json, "w") as f:
         json.dump(results, f, indent=1)
+
+    print(f"\n| scene | Mitsuba samples/s | mcrt samples/s | mcrt / Mitsuba | time to equal "
+          f"RMSE, mcrt / Mitsuba (samplers) |\n|---|---|---|---|---|")
+    for name, r in results.items():
+        v = r["mitsuba variant"]
+        tr = (f"**{r['time ratio']:.2f}×** ({r['samplers'][0]} / {r['samplers'][1]})"
+              if "time ratio" in r else "not reached")
+        print(f"| {TITLES[name]}, {r['rate_res']}², {spp_rate} spp | "
+              f"{r[v]['samples/s'] / 1e6:.2f} M (`{v}`) | {r['mcrt']['samples/s'] / 1e6:.2f} M | "
+              f"**{r['rate ratio']:.2f}×** | {tr} |")
+    print(f"\n(whole run {time.time() - t_start:.0f} s; figures in {a.json})")
 
 
 if __name__ == "__main__":
