@@ -62,8 +62,10 @@ impl Checkpoint {
         let m = &self.meta;
         let differ = |what: &str, a: String, b: String| {
             PartsError::Mismatch(format!(
-                "{}: the checkpoint is of another render: {what} {a} in the checkpoint, {b} now",
-                path.display()
+                "{}: the checkpoint is of another render: {what} {} in the checkpoint, {} now",
+                path.display(),
+                crate::input::shorten(&a),
+                crate::input::shorten(&b)
             ))
         };
         if m.version != now.version {
@@ -91,7 +93,8 @@ impl Checkpoint {
             return Err(differ("seed", m.seed.to_string(), now.seed.to_string()));
         }
         if m.settings != now.settings {
-            return Err(differ("settings", m.settings.clone(), now.settings.clone()));
+            let (a, b) = parts::settings_difference(&m.settings, &now.settings);
+            return Err(differ("setting", a, b));
         }
         Ok(())
     }
@@ -106,6 +109,31 @@ pub fn write_checkpoint(path: &Path, c: &Checkpoint) -> Result<(), ImageError> {
     parts::write_part_with(path, &part, &[(NEXT, &c.next)])
 }
 
+/// Checks a checkpoint's counts against each other: no pixel counts more samples than it
+/// rendered (`next`), and `next` spans exactly the samples the metadata says (its largest
+/// value is `spp`, its smallest the end of `samples=0..`), so the spp checked against
+/// `--spp` on resuming is the one the pixels hold. (The checksum has already tied the
+/// channels to the metadata; this catches a checkpoint whose parts disagree as written.)
+fn check_counts(part: &Part, next: &[u32]) -> Result<(), String> {
+    if next.iter().zip(&part.film.count).any(|(n, c)| c > n) {
+        return Err("a pixel's count exceeds its samples rendered".into());
+    }
+    let m = &part.meta;
+    let lo = next.iter().copied().min().unwrap_or(0);
+    let hi = next.iter().copied().max().unwrap_or(0);
+    if m.pass != (Pass { k: 1, n: 1 }) || m.first != 0 || (lo, hi) != (m.count, m.spp) {
+        return Err(format!(
+            "its 'next' channel holds {lo} to {hi} samples per pixel, but its metadata says \
+             pass {} with {} spp, samples {}..{}",
+            m.pass,
+            m.spp,
+            m.first,
+            m.first + m.count
+        ));
+    }
+    Ok(())
+}
+
 /// Reads a checkpoint written by [`write_checkpoint`].
 pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, PartsError> {
     let (part, mut more) = parts::read_part_with(path, &[NEXT]).map_err(|e| match e {
@@ -118,12 +146,10 @@ pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, PartsError> {
         e => e,
     })?;
     let next = more.remove(0);
-    if next.iter().zip(&part.film.count).any(|(n, c)| c > n) {
-        return Err(PartsError::Read {
-            path: path.to_path_buf(),
-            message: "a pixel's count exceeds its samples rendered".into(),
-        });
-    }
+    check_counts(&part, &next).map_err(|message| PartsError::Read {
+        path: path.to_path_buf(),
+        message,
+    })?;
     Ok(Checkpoint {
         meta: part.meta,
         film: part.film,

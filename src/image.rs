@@ -315,22 +315,65 @@ fn write_exr(path: &Path, img: &Image, half: bool) -> Result<(), String> {
     r.map_err(|e| e.to_string())
 }
 
-/// Reads the first RGB(A) layer of an OpenEXR file as linear RGB.
+/// Reads the first RGB(A) layer of an OpenEXR file as linear RGB: the file is read once
+/// ([`crate::input::read`]) and decoded by [`decode_exr`].
 pub fn read_exr(path: &Path) -> Result<Image, ImageError> {
-    use exr::prelude::*;
-    let img = read_first_rgba_layer_from_file(
-        path,
-        |res, _| self::Image::new(res.width() as u32, res.height() as u32),
-        |img: &mut self::Image, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-            let i = pos.y() * img.width as usize + pos.x();
-            img.pixels[i] = Color::new(r, g, b);
-        },
-    )
-    .map_err(|e| ImageError::Io {
+    let io = |message: String| ImageError::Io {
         path: path.to_path_buf(),
-        message: e.to_string(),
-    })?;
+        message,
+    };
+    let bytes = crate::input::read(path).map_err(io)?;
+    decode_exr(&bytes).map_err(io)
+}
+
+/// Decodes the first RGB(A) layer of an OpenEXR file's bytes as linear RGB, once
+/// [`check_exr_memory`] has found that its size fits in memory.
+pub fn decode_exr(bytes: &[u8]) -> Result<Image, String> {
+    use exr::prelude::*;
+    check_exr_memory(bytes, std::mem::size_of::<Color>() as u64)?;
+    let img = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            |res, _| self::Image::new(res.width() as u32, res.height() as u32),
+            |img: &mut self::Image, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+                let i = pos.y() * img.width as usize + pos.x();
+                img.pixels[i] = Color::new(r, g, b);
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(std::io::Cursor::new(bytes))
+        .map_err(|e| e.to_string())?;
     Ok(img.layer_data.channel_data.pixels)
+}
+
+/// Reads an OpenEXR file's headers and checks, before anything the size of its pixels is
+/// allocated, that decoding its largest layer fits in memory ([`crate::check_allocation`]):
+/// the decoder's samples of every channel plus `per_pixel` bytes a pixel for the caller's
+/// copy. A header may claim any size (a 313-byte file can claim 100000 × 100000 pixels).
+pub fn check_exr_memory(bytes: &[u8], per_pixel: u64) -> Result<(), String> {
+    let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
+        .map_err(|e| e.to_string())?;
+    let mut largest = (0u64, 0usize, 0usize);
+    for h in meta.headers.iter() {
+        let (w, ht) = (h.layer_size.width(), h.layer_size.height());
+        let samples: u64 = h
+            .channels
+            .list
+            .iter()
+            .map(|c| c.sample_type.bytes_per_sample() as u64)
+            .sum();
+        let need = (w as u64)
+            .saturating_mul(ht as u64)
+            .saturating_mul(samples.saturating_add(per_pixel));
+        if need > largest.0 {
+            largest = (need, w, ht);
+        }
+    }
+    let (need, w, h) = largest;
+    crate::check_allocation(need)
+        .map_err(|e| format!("its header claims {w} × {h} pixels, which {e}"))
 }
 
 #[cfg(test)]

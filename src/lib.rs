@@ -16,6 +16,7 @@ pub mod compare;
 pub mod film;
 pub mod geometry;
 pub mod image;
+pub mod input;
 pub mod integrator;
 pub mod light;
 pub mod material;
@@ -92,33 +93,42 @@ pub fn load_scene(path: &Path) -> Result<SceneDesc, Error> {
 }
 
 pub fn load_scene_with(path: &Path, opts: &LoadOptions) -> Result<SceneDesc, Error> {
-    match path
+    Ok(load_scene_source(path, opts)?.0)
+}
+
+/// [`load_scene_with`], also giving the scene file's bytes (read once: a checkpoint hashes
+/// the very bytes the scene was parsed from).
+pub fn load_scene_source(path: &Path, opts: &LoadOptions) -> Result<(SceneDesc, Vec<u8>), Error> {
+    let format = path
         .extension()
         .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
-        .as_deref()
-    {
-        Some("toml") => {
-            if !opts.defines.is_empty() {
-                return Err(Error::Usage(
-                    "-D parameters apply to Mitsuba XML scenes, not to .toml ones".into(),
-                ));
-            }
-            Ok(scene::toml::load_toml(path)?)
-        }
-        Some("xml") => Ok(scene::xml::load_xml(
-            path,
-            &scene::xml::XmlOptions {
-                defines: opts.defines.clone(),
-                lenient: opts.lenient,
-            },
-        )?),
-        _ => Err(Error::Scene(SceneError::new(
+        .map(|e| e.to_ascii_lowercase());
+    if !matches!(format.as_deref(), Some("toml" | "xml")) {
+        return Err(Error::Scene(SceneError::new(
             path,
             None,
             "unsupported scene format (expected a .toml file or a Mitsuba 3 .xml file)",
-        ))),
+        )));
     }
+    if format.as_deref() == Some("toml") && !opts.defines.is_empty() {
+        return Err(Error::Usage(
+            "-D parameters apply to Mitsuba XML scenes, not to .toml ones".into(),
+        ));
+    }
+    let bytes = input::read(path)
+        .map_err(|e| SceneError::new(path, None, format!("cannot read scene file: {e}")))?;
+    let text = input::as_text(&bytes)
+        .map_err(|e| SceneError::new(path, None, format!("cannot read scene file: {e}")))?;
+    let desc = if format.as_deref() == Some("toml") {
+        scene::toml::parse_toml(path, text)?
+    } else {
+        let xml = scene::xml::XmlOptions {
+            defines: opts.defines.clone(),
+            lenient: opts.lenient,
+        };
+        scene::xml::parse_xml(path, text, &xml)?
+    };
+    Ok((desc, bytes))
 }
 
 /// Bytes of memory a render needs beyond the scene: the film (fixed-point sums and sums of
@@ -144,12 +154,83 @@ fn photon_memory(s: &RenderSettings) -> u64 {
     emitted.saturating_mul((PHOTON_BOUNCES + 1) * bytes)
 }
 
-/// Memory the system can still give, from /proc/meminfo (None where that is unknown).
+/// Memory this process can still take: the least of the system's available memory
+/// (`MemAvailable` in /proc/meminfo), the address space left under `RLIMIT_AS` (`ulimit -v`)
+/// and what the cgroup's `memory.max` leaves (None where none of these is known).
 pub fn available_memory() -> Option<u64> {
+    [meminfo_available(), address_space_left(), cgroup_left()]
+        .into_iter()
+        .flatten()
+        .min()
+}
+
+fn meminfo_available() -> Option<u64> {
     let info = std::fs::read_to_string("/proc/meminfo").ok()?;
     let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
     let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kb * 1024)
+}
+
+/// `RLIMIT_AS` less the address space already mapped (`VmSize`): an allocation beyond it
+/// fails, and Rust aborts on a failed allocation.
+#[cfg(target_os = "linux")]
+fn address_space_left() -> Option<u64> {
+    let mut lim = libc::rlimit {
+        rlim_cur: 0,
+        rlim_max: 0,
+    };
+    // SAFETY: getrlimit writes one rlimit through a valid pointer.
+    if unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut lim) } != 0
+        || lim.rlim_cur == libc::RLIM_INFINITY
+    {
+        return None;
+    }
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmSize:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some((lim.rlim_cur as u64).saturating_sub(kb * 1024))
+}
+
+#[cfg(not(target_os = "linux"))]
+fn address_space_left() -> Option<u64> {
+    None
+}
+
+/// The cgroup v2 limit less its current use, where the process's cgroup is mounted at
+/// /sys/fs/cgroup (as in a container).
+fn cgroup_left() -> Option<u64> {
+    let read = |f: &str| -> Option<u64> {
+        std::fs::read_to_string(format!("/sys/fs/cgroup/{f}"))
+            .ok()?
+            .trim()
+            .parse()
+            .ok()
+    };
+    Some(read("memory.max")?.saturating_sub(read("memory.current")?))
+}
+
+/// A byte count for messages: bytes below 1 MiB, else MiB or GiB with one decimal.
+pub fn bytes_text(b: u64) -> String {
+    const MIB: f64 = (1u64 << 20) as f64;
+    match b {
+        b if b < 1 << 20 => format!("{b} bytes"),
+        b if b < 1 << 30 => format!("{:.1} MiB", b as f64 / MIB),
+        b => format!("{:.1} GiB", b as f64 / MIB / 1024.0),
+    }
+}
+
+/// The memory budget every allocation sized by an input (a file's header, a count) is
+/// checked against before it is made: Err says how much is needed and how much is
+/// available, for the caller to put after what needs it.
+pub fn check_allocation(bytes: u64) -> Result<(), String> {
+    match available_memory() {
+        Some(have) if bytes > have => Err(format!(
+            "needs {} of memory, but only {} is available",
+            bytes_text(bytes),
+            bytes_text(have)
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// Refuses a render whose film would not fit in memory, before anything is allocated.

@@ -404,7 +404,8 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
         defines: parse_defines(&a.define)?,
         lenient: a.lenient,
     };
-    let desc = mcrt::load_scene_with(&a.scene, &load)?;
+    // Read once: the checkpoint's hash is of the bytes the scene was parsed from.
+    let (desc, scene_bytes) = mcrt::load_scene_source(&a.scene, &load)?;
     for w in &desc.warnings {
         eprintln!("warning: {w}");
     }
@@ -469,7 +470,6 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
 
     let (_, _, fw, fh) = settings.window();
     let npix = fw as u64 * fh as u64;
-    let scene_bytes = std::fs::read(&a.scene).unwrap_or_default();
     let extra = format!("defines={:?} lenient={}", a.define, a.lenient);
     if settings.params.kind == IntegratorKind::Sppm {
         return render_photon(&a, &scene, &settings, &output, load_time);
@@ -740,11 +740,12 @@ fn merge(a: MergeArgs) -> Result<(), Error> {
             )));
         }
     }
-    let mut list = Vec::with_capacity(a.parts.len());
+    // One part in memory at a time.
+    let mut merger = parts::Merger::default();
     for p in &a.parts {
-        list.push((p.clone(), parts::read_part(p)?));
+        merger.add(p, &parts::read_part(p)?)?;
     }
-    let merged = parts::merge(&list)?;
+    let merged = merger.finish()?;
     write_image(&a.output, &merged.film.image(), &a.image.options())?;
     if let Some(k) = &a.keep_sums {
         parts::write_part(k, &merged)?;

@@ -40,8 +40,11 @@ use crate::render::{render_samples, RenderError, RenderSettings, RenderStats};
 use crate::scene::Scene;
 use std::path::{Path, PathBuf};
 
-/// Format tag of the sums files this version reads and writes.
-pub const FORMAT: &str = "mcrt-sums 1";
+/// Format tag of the sums files this version reads and writes (2: with a checksum).
+pub const FORMAT: &str = "mcrt-sums 2";
+/// The most passes a render can be split into (`--pass K/N`, N ≤ this): far more machines
+/// than a render farm has, and a bound on what a sums file's `pass` may claim.
+pub const MAX_PASSES: u32 = 1 << 16;
 /// Name of the EXR attribute holding the metadata.
 pub const ATTRIBUTE: &str = "mcrtSums";
 const LAYER: &str = "mcrt-sums";
@@ -56,12 +59,23 @@ pub struct Pass {
 impl std::str::FromStr for Pass {
     type Err = String;
     fn from_str(s: &str) -> Result<Pass, String> {
-        let bad = || format!("expected K/N with 1 ≤ K ≤ N (e.g. 3/8), got '{s}'");
+        let bad = || {
+            format!(
+                "expected K/N with 1 ≤ K ≤ N (e.g. 3/8), got '{}'",
+                crate::input::shorten(s)
+            )
+        };
         let (k, n) = s.split_once('/').ok_or_else(bad)?;
         let k: u32 = k.trim().parse().map_err(|_| bad())?;
         let n: u32 = n.trim().parse().map_err(|_| bad())?;
         if k == 0 || k > n {
             return Err(bad());
+        }
+        if n > MAX_PASSES {
+            return Err(format!(
+                "at most {MAX_PASSES} passes, got '{}'",
+                crate::input::shorten(s)
+            ));
         }
         Ok(Pass { k, n })
     }
@@ -279,6 +293,40 @@ pub fn write_part_with(
     write_atomic(path, |tmp| write_part_exr(tmp, part, extra))
 }
 
+/// The names of a sums file's integer channels, in the order their checksum takes them:
+/// the sums' words, `count`, then `extra`.
+fn integer_channels(extra: &[&str]) -> Vec<String> {
+    let mut names = Vec::with_capacity(QUANTITIES.len() * CHANNELS.len() * 4 + 1 + extra.len());
+    for qname in QUANTITIES {
+        for cname in CHANNELS {
+            for word in 0..4 {
+                names.push(format!("{qname}.{cname}.w{word}"));
+            }
+        }
+    }
+    names.push("count".into());
+    names.extend(extra.iter().map(|s| s.to_string()));
+    names
+}
+
+/// The checksum a sums file carries (`checksum=` in its metadata) of its integer channels in
+/// [`integer_channels`] order: FNV-1a (64-bit) over each name's bytes and each value as one
+/// word. A file whose sums, counts or `next` were changed after it was written (a forged or
+/// damaged checkpoint) no longer matches it.
+pub fn checksum<'a>(channels: impl IntoIterator<Item = (&'a str, &'a [u32])>) -> u64 {
+    const PRIME: u64 = 0x0100_0000_01b3;
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    for (name, values) in channels {
+        for &b in name.as_bytes() {
+            h = (h ^ b as u64).wrapping_mul(PRIME);
+        }
+        for &v in values {
+            h = (h ^ v as u64).wrapping_mul(PRIME);
+        }
+    }
+    h
+}
+
 fn write_part_exr(path: &Path, part: &Part, extra: &[(&str, &[u32])]) -> Result<(), String> {
     use exr::prelude::*;
     let f = &part.film;
@@ -292,32 +340,36 @@ fn write_part_exr(path: &Path, part: &Part, extra: &[(&str, &[u32])]) -> Result<
         let v: Vec<f32> = img.pixels.iter().map(|p| p[c]).collect();
         channels.push(AnyChannel::new(*name, FlatSamples::F32(v)));
     }
-    for (q, qname) in QUANTITIES.iter().enumerate() {
-        let data = if q == 0 { &f.sum } else { &f.sum_sq };
-        for (c, cname) in CHANNELS.iter().enumerate() {
+    let mut ints: Vec<Vec<u32>> = Vec::new();
+    for data in [&f.sum, &f.sum_sq] {
+        for c in 0..CHANNELS.len() {
             for word in 0..4 {
-                let v: Vec<u32> = data
-                    .iter()
-                    .map(|p| ((p[c] as u128) >> (32 * word)) as u32)
-                    .collect();
-                channels.push(AnyChannel::new(
-                    format!("{qname}.{cname}.w{word}").as_str(),
-                    FlatSamples::U32(v),
-                ));
+                ints.push(
+                    data.iter()
+                        .map(|p| ((p[c] as u128) >> (32 * word)) as u32)
+                        .collect(),
+                );
             }
         }
     }
-    channels.push(AnyChannel::new("count", FlatSamples::U32(f.count.clone())));
+    ints.push(f.count.clone());
     for (name, v) in extra {
         if v.len() != w * h {
             return Err(format!("channel '{name}' does not have the film's size"));
         }
-        channels.push(AnyChannel::new(*name, FlatSamples::U32(v.to_vec())));
+        ints.push(v.to_vec());
+    }
+    let extra_names: Vec<&str> = extra.iter().map(|(n, _)| *n).collect();
+    let names = integer_channels(&extra_names);
+    let sum = checksum(names.iter().map(|n| n.as_str()).zip(ints.iter().map(|v| &v[..])));
+    for (name, v) in names.iter().zip(ints) {
+        channels.push(AnyChannel::new(name.as_str(), FlatSamples::U32(v)));
     }
     let mut attrs = LayerAttributes::named(LAYER);
+    let text = format!("{}checksum={sum:016x}\n", part.meta.to_text());
     attrs.other.insert(
         Text::from(ATTRIBUTE),
-        AttributeValue::Text(Text::from_slice_unchecked(part.meta.to_text().as_bytes())),
+        AttributeValue::Text(Text::from_slice_unchecked(text.as_bytes())),
     );
     let layer = Layer::new(
         (w, h),
@@ -331,84 +383,124 @@ fn write_part_exr(path: &Path, part: &Part, extra: &[(&str, &[u32])]) -> Result<
         .map_err(|e| e.to_string())
 }
 
-/// Reads a sums file written by [`write_part`].
+/// Reads a sums file written by [`write_part`]: beyond [`read_part_with`]'s checks, no
+/// pixel counts more samples than the pass holds.
 pub fn read_part(path: &Path) -> std::result::Result<Part, PartsError> {
-    Ok(read_part_with(path, &[])?.0)
+    let part = read_part_with(path, &[])?.0;
+    if let Some(i) = part.film.count.iter().position(|&c| c > part.meta.count) {
+        let w = part.film.width.max(1) as usize;
+        return Err(PartsError::Read {
+            path: path.to_path_buf(),
+            message: format!(
+                "pixel ({}, {}) counts {} samples, but the pass holds {}",
+                i % w,
+                i / w,
+                part.film.count[i],
+                part.meta.count
+            ),
+        });
+    }
+    Ok(part)
 }
 
-/// Reads a sums file and the extra u32 channels `extra` (each required).
+/// Bytes a pixel of a sums file takes in memory once read: its film and its channels' copy.
+fn part_bytes_per_pixel(extra: usize) -> u64 {
+    let film = 2 * std::mem::size_of::<[i128; 3]>() + std::mem::size_of::<u32>();
+    (film + 4 * extra) as u64
+}
+
+/// Reads a sums file and the extra u32 channels `extra` (each required). The file is read
+/// once, its size checked against the memory budget before it is decoded, and its channels
+/// against the checksum in its metadata.
 pub fn read_part_with(
     path: &Path,
     extra: &[&str],
 ) -> std::result::Result<(Part, Vec<Vec<u32>>), PartsError> {
-    use exr::prelude::*;
     let err = |message: String| PartsError::Read {
         path: path.to_path_buf(),
         message,
     };
+    let bytes = crate::input::read(path).map_err(err)?;
+    decode_part(&bytes, extra).map_err(err)
+}
+
+/// Decodes the bytes of a sums file (see [`read_part_with`]); Err says what is wrong.
+pub fn decode_part(
+    bytes: &[u8],
+    extra: &[&str],
+) -> std::result::Result<(Part, Vec<Vec<u32>>), String> {
+    use exr::prelude::*;
+    crate::image::check_exr_memory(bytes, part_bytes_per_pixel(extra.len()))?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
         .all_channels()
         .first_valid_layer()
         .all_attributes()
-        .from_file(path)
-        .map_err(|e| err(e.to_string()))?;
+        .from_buffered(std::io::Cursor::new(bytes))
+        .map_err(|e| e.to_string())?;
     let layer = &image.layer_data;
     let text = layer
         .attributes
         .other
         .get(ATTRIBUTE.as_bytes())
-        .ok_or_else(|| {
-            err(format!(
-                "no '{ATTRIBUTE}' attribute (not written by 'mcrt render --pass')"
-            ))
-        })?;
+        .ok_or_else(|| format!("no '{ATTRIBUTE}' attribute (not written by 'mcrt render --pass')"))?;
     let AttributeValue::Text(text) = text else {
-        return Err(err(format!("the '{ATTRIBUTE}' attribute is not text")));
+        return Err(format!("the '{ATTRIBUTE}' attribute is not text"));
     };
-    let meta = PartMeta::from_text(&String::from_utf8_lossy(text.bytes())).map_err(err)?;
+    let text = String::from_utf8_lossy(text.bytes());
+    let meta = PartMeta::from_text(&text)?;
     let (w, h) = (layer.size.width(), layer.size.height());
     if (w, h) != (meta.film_size().0 as usize, meta.film_size().1 as usize) {
-        return Err(err(format!(
+        return Err(format!(
             "the layer is {w} × {h} pixels but the metadata says {} × {}",
             meta.film_size().0,
             meta.film_size().1
-        )));
+        ));
     }
-    let channel = |name: &str| -> std::result::Result<&Vec<u32>, PartsError> {
+    let channel = |name: &str| -> std::result::Result<&[u32], String> {
         let ch = layer
             .channel_data
             .list
             .iter()
             .find(|c| c.name.eq(name))
-            .ok_or_else(|| err(format!("no channel '{name}'")))?;
+            .ok_or_else(|| format!("no channel '{name}'"))?;
         match &ch.sample_data {
             FlatSamples::U32(v) if v.len() == w * h => Ok(v),
-            _ => Err(err(format!("channel '{name}' is not u32"))),
+            _ => Err(format!("channel '{name}' is not u32")),
         }
     };
+    let names = integer_channels(extra);
+    let ints = names
+        .iter()
+        .map(|n| channel(n))
+        .collect::<std::result::Result<Vec<_>, _>>()?;
+    let stated = text
+        .lines()
+        .find_map(|l| l.strip_prefix("checksum="))
+        .ok_or("the metadata lacks 'checksum'")?;
+    let sum = checksum(names.iter().map(|n| n.as_str()).zip(ints.iter().copied()));
+    if u64::from_str_radix(stated, 16).ok() != Some(sum) {
+        return Err(format!(
+            "its channels do not match their checksum ({} in the metadata, {sum:016x} \
+             computed): the file was changed or damaged after it was written",
+            crate::input::shorten(stated)
+        ));
+    }
     let mut film = Film::new(w as u32, h as u32);
-    for (q, qname) in QUANTITIES.iter().enumerate() {
-        for (c, cname) in CHANNELS.iter().enumerate() {
+    let mut words = ints.iter();
+    for data in [&mut film.sum, &mut film.sum_sq] {
+        for c in 0..CHANNELS.len() {
             for word in 0..4 {
-                let v = channel(&format!("{qname}.{cname}.w{word}"))?;
-                let data = if q == 0 {
-                    &mut film.sum
-                } else {
-                    &mut film.sum_sq
-                };
-                for (p, &x) in data.iter_mut().zip(v) {
+                let v = words.next().ok_or("missing sums channel")?;
+                for (p, &x) in data.iter_mut().zip(v.iter()) {
                     p[c] = (p[c] as u128 | (x as u128) << (32 * word)) as i128;
                 }
             }
         }
     }
-    film.count.copy_from_slice(channel("count")?);
-    let mut more = Vec::with_capacity(extra.len());
-    for name in extra {
-        more.push(channel(name)?.clone());
-    }
+    film.count.copy_from_slice(words.next().ok_or("missing count channel")?);
+    let more = words.map(|v| v.to_vec()).collect();
     Ok((Part { meta, film }, more))
 }
 
@@ -416,76 +508,31 @@ pub fn read_part_with(
 /// number of passes) and hold every pass exactly once, and adds their sums. The result is
 /// pass 1/1: the film of a single render of all spp samples, bit for bit.
 pub fn merge(parts: &[(PathBuf, Part)]) -> Result<Part, PartsError> {
-    let Some((p0, first)) = parts.first() else {
-        return Err(PartsError::Mismatch("no parts to merge".into()));
-    };
-    let m0 = &first.meta;
+    let mut m = Merger::default();
     for (p, part) in parts {
-        let m = &part.meta;
-        let differ = |what: &str, a: String, b: String| {
-            PartsError::Mismatch(format!(
-                "{} and {} are not parts of the same render: {what} {a} versus {b}",
-                p0.display(),
-                p.display()
-            ))
-        };
-        if m.version != m0.version {
-            return Err(differ(
-                "mcrt version",
-                m0.version.clone(),
-                m.version.clone(),
-            ));
-        }
-        if m.scene_hash != m0.scene_hash {
-            return Err(differ(
-                "scene file",
-                format!("{} (hash {})", m0.scene, m0.scene_hash),
-                format!("{} (hash {})", m.scene, m.scene_hash),
-            ));
-        }
-        if (m.width, m.height) != (m0.width, m0.height) {
-            return Err(differ(
-                "image size",
-                format!("{} × {}", m0.width, m0.height),
-                format!("{} × {}", m.width, m.height),
-            ));
-        }
-        if m.crop != m0.crop {
-            return Err(differ("crop", m0.crop_text(), m.crop_text()));
-        }
-        if m.seed != m0.seed {
-            return Err(differ("seed", m0.seed.to_string(), m.seed.to_string()));
-        }
-        if m.spp != m0.spp {
-            return Err(differ("spp", m0.spp.to_string(), m.spp.to_string()));
-        }
-        if m.settings != m0.settings {
-            return Err(differ("settings", m0.settings.clone(), m.settings.clone()));
-        }
-        if m.pass.n != m0.pass.n {
-            return Err(differ(
-                "number of passes",
-                m0.pass.n.to_string(),
-                m.pass.n.to_string(),
-            ));
-        }
-        if (m.first, m.count) != m.pass.share(m.spp) {
-            return Err(PartsError::Mismatch(format!(
-                "{}: pass {} of {} spp should hold samples {:?}, it holds {}..{}",
-                p.display(),
-                m.pass,
-                m.spp,
-                m.pass.share(m.spp),
-                m.first,
-                m.first + m.count
-            )));
-        }
+        m.add(p, part)?;
     }
-    let n = m0.pass.n as usize;
-    let mut seen: Vec<Option<&PathBuf>> = vec![None; n];
-    for (p, part) in parts {
-        let k = part.meta.pass.k as usize - 1;
-        if let Some(q) = seen[k] {
+    m.finish()
+}
+
+/// A merge in progress, one part at a time ([`merge`]): it holds one film and the passes
+/// seen, never state sized by a part's claimed number of passes, so `mcrt merge` needs the
+/// memory of two films however many parts it is given.
+#[derive(Default)]
+pub struct Merger {
+    first: Option<(PathBuf, PartMeta)>,
+    film: Option<Film>,
+    seen: std::collections::BTreeMap<u32, PathBuf>,
+}
+
+impl Merger {
+    /// Checks `part` (read from `p`) against the first part and the passes seen, and adds it.
+    pub fn add(&mut self, p: &Path, part: &Part) -> Result<(), PartsError> {
+        let (p0, m0) = self
+            .first
+            .get_or_insert_with(|| (p.to_path_buf(), part.meta.clone()));
+        check_same_render(p0, m0, p, &part.meta)?;
+        if let Some(q) = self.seen.get(&part.meta.pass.k) {
             return Err(PartsError::Mismatch(format!(
                 "pass {} is given twice: {} and {}",
                 part.meta.pass,
@@ -493,31 +540,207 @@ pub fn merge(parts: &[(PathBuf, Part)]) -> Result<Part, PartsError> {
                 p.display()
             )));
         }
-        seen[k] = Some(p);
+        self.seen.insert(part.meta.pass.k, p.to_path_buf());
+        match &mut self.film {
+            None => self.film = Some(part.film.clone()),
+            Some(f) => f.add_film(&part.film),
+        }
+        Ok(())
     }
-    let missing: Vec<String> = (0..n)
-        .filter(|&k| seen[k].is_none())
-        .map(|k| format!("{}/{n}", k + 1))
-        .collect();
-    if !missing.is_empty() {
+
+    /// The merged part, once every pass has been added.
+    pub fn finish(self) -> Result<Part, PartsError> {
+        let (Some((_, m0)), Some(film)) = (self.first, self.film) else {
+            return Err(PartsError::Mismatch("no parts to merge".into()));
+        };
+        let n = m0.pass.n;
+        let given = self.seen.len() as u32;
+        if given < n {
+            // The first few missing passes, found by walking the passes given.
+            const SHOWN: usize = 10;
+            let mut missing = Vec::new();
+            let mut k = 1;
+            for &g in self.seen.keys().chain(std::iter::once(&(n + 1))) {
+                while k < g && missing.len() < SHOWN {
+                    missing.push(format!("{k}/{n}"));
+                    k += 1;
+                }
+                k = g + 1;
+            }
+            let more = (n - given) as usize - missing.len();
+            return Err(PartsError::Mismatch(format!(
+                "the parts do not cover all {n} passes: missing pass{} {}{} (given {given} of {n})",
+                if n - given > 1 { "es" } else { "" },
+                missing.join(", "),
+                if more > 0 {
+                    format!(" and {more} more")
+                } else {
+                    String::new()
+                }
+            )));
+        }
+        let pass = Pass { k: 1, n: 1 };
+        let (f, c) = pass.share(m0.spp);
+        let meta = PartMeta {
+            pass,
+            first: f,
+            count: c,
+            ..m0
+        };
+        Ok(Part { meta, film })
+    }
+}
+
+/// Checks that the part `m` (file `p`) and the first part `m0` (file `p0`) are parts of one
+/// render, and that `m` holds its pass's samples.
+fn check_same_render(p0: &Path, m0: &PartMeta, p: &Path, m: &PartMeta) -> Result<(), PartsError> {
+    let differ = |what: &str, a: String, b: String| {
+        PartsError::Mismatch(format!(
+            "{} and {} are not parts of the same render: {what} {} versus {}",
+            p0.display(),
+            p.display(),
+            crate::input::shorten(&a),
+            crate::input::shorten(&b)
+        ))
+    };
+    if m.version != m0.version {
+        return Err(differ(
+            "mcrt version",
+            m0.version.clone(),
+            m.version.clone(),
+        ));
+    }
+    if m.scene_hash != m0.scene_hash {
+        return Err(differ(
+            "scene file",
+            format!("{} (hash {})", m0.scene, m0.scene_hash),
+            format!("{} (hash {})", m.scene, m.scene_hash),
+        ));
+    }
+    if (m.width, m.height) != (m0.width, m0.height) {
+        return Err(differ(
+            "image size",
+            format!("{} × {}", m0.width, m0.height),
+            format!("{} × {}", m.width, m.height),
+        ));
+    }
+    if m.crop != m0.crop {
+        return Err(differ("crop", m0.crop_text(), m.crop_text()));
+    }
+    if m.seed != m0.seed {
+        return Err(differ("seed", m0.seed.to_string(), m.seed.to_string()));
+    }
+    if m.spp != m0.spp {
+        return Err(differ("spp", m0.spp.to_string(), m.spp.to_string()));
+    }
+    if m.settings != m0.settings {
+        let (a, b) = settings_difference(&m0.settings, &m.settings);
+        return Err(differ("settings", a, b));
+    }
+    if m.pass.n != m0.pass.n {
+        return Err(differ(
+            "number of passes",
+            m0.pass.n.to_string(),
+            m.pass.n.to_string(),
+        ));
+    }
+    if (m.first, m.count) != m.pass.share(m.spp) {
         return Err(PartsError::Mismatch(format!(
-            "the parts do not cover all {n} passes: missing pass{} {} (given {} of {n})",
-            if missing.len() > 1 { "es" } else { "" },
-            missing.join(", "),
-            n - missing.len()
+            "{}: pass {} of {} spp should hold samples {:?}, it holds {}..{}",
+            p.display(),
+            m.pass,
+            m.spp,
+            m.pass.share(m.spp),
+            m.first,
+            m.first + m.count
         )));
     }
-    let mut film = first.film.clone();
-    for (_, part) in &parts[1..] {
-        film.add_film(&part.film);
+    Ok(())
+}
+
+/// Where two settings strings first differ: the setting there (`name: value` or
+/// `name=value`), from each. Settings strings are long (every integrator parameter); a
+/// mismatch names the one that differs rather than printing both whole.
+pub fn settings_difference(a: &str, b: &str) -> (String, String) {
+    let at = a
+        .char_indices()
+        .zip(b.chars())
+        .find(|((_, x), y)| x != y)
+        .map_or(a.len().min(b.len()), |((i, _), _)| i);
+    // The setting starts after the last separator before the difference: ", " or "{ "
+    // inside the parameters' Debug text, " " before a top-level `key=value`. The two
+    // strings agree up to there.
+    let head = &a[..at];
+    let mut start = 0;
+    for sep in [", ", "{ "] {
+        if let Some(i) = head.rfind(sep) {
+            start = start.max(i + sep.len());
+        }
     }
-    let pass = Pass { k: 1, n: 1 };
-    let (f, c) = pass.share(m0.spp);
-    let meta = PartMeta {
-        pass,
-        first: f,
-        count: c,
-        ..m0.clone()
+    for (i, _) in head.match_indices(' ') {
+        if starts_with_key(&a[i + 1..]) {
+            start = start.max(i + 1);
+        }
+    }
+    let field = |s: &str| -> String {
+        let rest = &s[start.min(s.len())..];
+        let mut end = [", ", " }"]
+            .iter()
+            .filter_map(|sep| rest.find(sep))
+            .min()
+            .unwrap_or(rest.len());
+        if let Some(i) = rest[..end]
+            .match_indices(' ')
+            .map(|(i, _)| i)
+            .find(|&i| starts_with_key(&rest[i + 1..]))
+        {
+            end = i;
+        }
+        match &rest[..end] {
+            "" => "(nothing)".into(),
+            f => f.to_string(),
+        }
     };
-    Ok(Part { meta, film })
+    (field(a), field(b))
+}
+
+/// Whether `s` starts with a top-level `key=`.
+fn starts_with_key(s: &str) -> bool {
+    let key = s
+        .split(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+        .next()
+        .unwrap_or("");
+    !key.is_empty() && s[key.len()..].starts_with('=')
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_differing_setting_is_named() {
+        let a = "camera=None sampler=Sobol IntegratorParams { kind: Path, shadow_rays: 1, rr: Fixed(0.5) } defines=[] lenient=false";
+        let b = "camera=None sampler=Sobol IntegratorParams { kind: Path, shadow_rays: 4, rr: Fixed(0.5) } defines=[] lenient=false";
+        assert_eq!(
+            settings_difference(a, b),
+            ("shadow_rays: 1".into(), "shadow_rays: 4".into())
+        );
+        let c = a.replace("camera=None", "camera=Some(\"top\")");
+        assert_eq!(
+            settings_difference(a, &c),
+            ("camera=None".into(), "camera=Some(\"top\")".into())
+        );
+        let d = a.replace("lenient=false", "lenient=true");
+        assert_eq!(
+            settings_difference(a, &d),
+            ("lenient=false".into(), "lenient=true".into())
+        );
+    }
+
+    #[test]
+    fn pass_count_is_bounded() {
+        assert!("1/4000000000".parse::<Pass>().is_err());
+        assert!(format!("1/{}", MAX_PASSES + 1).parse::<Pass>().is_err());
+        assert!(format!("1/{MAX_PASSES}").parse::<Pass>().is_ok());
+    }
 }

@@ -150,6 +150,22 @@ pub fn srgb_to_linear(v: f32) -> f32 {
     }
 }
 
+/// What is wrong with a colour value, constant or texel, by the one rule they all obey:
+/// finite and not negative, and for a reflectance (`max` = 1) at most `max` in every channel.
+/// None when it is right. The message completes "'albedo' …" or "texture values …".
+pub fn color_fault(c: Color, max: Option<f32>) -> Option<String> {
+    if !c.is_finite() || c.min_element() < 0.0 {
+        return Some("must be finite and not negative".into());
+    }
+    match max {
+        Some(m) if c.max_element() > m => Some(format!(
+            "must be at most {m} in every channel (a surface cannot reflect more light than \
+             it receives)"
+        )),
+        _ => None,
+    }
+}
+
 /// Largest decoded PNG accepted (bytes of 8- or 16-bit samples), against hostile headers.
 const MAX_PNG_BYTES: usize = 1 << 30;
 
@@ -161,11 +177,13 @@ pub struct Bitmap {
     pub height: u32,
     pub pixels: Vec<Color>,
     mean: Color,
+    /// The largest value of any channel of any pixel.
+    max: f32,
 }
 
 impl Bitmap {
     /// A bitmap from linear pixel values (row-major, top row first). Errors when the size
-    /// is zero or does not match the pixel count.
+    /// is zero or does not match the pixel count, or a pixel breaks [`color_fault`]'s rule.
     pub fn from_pixels(width: u32, height: u32, pixels: Vec<Color>) -> Result<Bitmap, String> {
         if width == 0 || height == 0 {
             return Err(format!("empty image ({width}×{height})"));
@@ -177,8 +195,17 @@ impl Bitmap {
             ));
         }
         let mut sum = glam::DVec3::ZERO;
-        for p in &pixels {
+        let mut max = 0f32;
+        for (i, p) in pixels.iter().enumerate() {
+            if let Some(f) = color_fault(*p, None) {
+                let (x, y) = (i as u64 % width as u64, i as u64 / width as u64);
+                return Err(format!(
+                    "pixel ({x}, {y}) is ({}, {}, {}): texture values {f}",
+                    p.x, p.y, p.z
+                ));
+            }
             sum += p.as_dvec3();
+            max = max.max(p.max_element());
         }
         let mean = (sum / pixels.len() as f64).as_vec3();
         Ok(Bitmap {
@@ -186,42 +213,45 @@ impl Bitmap {
             height,
             pixels,
             mean,
+            max,
         })
     }
 
     /// Reads a PNG (8 or 16 bits; gray, gray+alpha, RGB, RGBA or palette) or OpenEXR file,
     /// recognized by its first bytes. Unless `raw`, PNG values are sRGB-decoded to linear;
-    /// EXR values are linear and kept as they are.
+    /// EXR values are linear and kept as they are. The file is read once
+    /// ([`crate::input::read`]).
     pub fn load(path: &Path, raw: bool) -> Result<Bitmap, SceneError> {
         let err = |msg: String| SceneError::new(path, None, msg);
-        let mut magic = [0u8; 8];
-        {
-            use std::io::Read;
-            let mut f =
-                std::fs::File::open(path).map_err(|e| err(format!("cannot read texture: {e}")))?;
-            let n = f
-                .read(&mut magic)
-                .map_err(|e| err(format!("cannot read texture: {e}")))?;
-            if n < 4 {
-                return Err(err("not a PNG or OpenEXR image (file too short)".into()));
-            }
-        }
-        if magic == *b"\x89PNG\r\n\x1a\n" {
-            load_png(path, raw).map_err(err)
-        } else if magic[..4] == [0x76, 0x2f, 0x31, 0x01] {
-            let img = crate::image::read_exr(path)
-                .map_err(|e| err(format!("cannot read OpenEXR texture: {e}")))?;
-            Bitmap::from_pixels(img.width, img.height, img.pixels).map_err(err)
+        let bytes =
+            crate::input::read(path).map_err(|e| err(format!("cannot read texture: {e}")))?;
+        Bitmap::decode(&bytes, raw).map_err(err)
+    }
+
+    /// Decodes a PNG or OpenEXR file's bytes (see [`Bitmap::load`]), checking the decoded
+    /// size against the memory budget before it is allocated.
+    pub fn decode(bytes: &[u8], raw: bool) -> Result<Bitmap, String> {
+        if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
+            decode_png(bytes, raw)
+        } else if bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01]) {
+            let img = crate::image::decode_exr(bytes)
+                .map_err(|e| format!("cannot read OpenEXR texture: {e}"))?;
+            Bitmap::from_pixels(img.width, img.height, img.pixels)
+        } else if bytes.len() < 8 {
+            Err("not a PNG or OpenEXR image (file too short)".into())
         } else {
-            Err(err(
-                "unsupported texture format (expected a PNG or OpenEXR image)".into(),
-            ))
+            Err("unsupported texture format (expected a PNG or OpenEXR image)".into())
         }
     }
 
     /// Per-channel mean of the pixels.
     pub fn mean(&self) -> Color {
         self.mean
+    }
+
+    /// The largest value of any channel of any pixel.
+    pub fn max(&self) -> f32 {
+        self.max
     }
 
     #[inline]
@@ -262,10 +292,9 @@ impl Bitmap {
     }
 }
 
-fn load_png(path: &Path, raw: bool) -> Result<Bitmap, String> {
-    let file = std::fs::File::open(path).map_err(|e| format!("cannot read texture: {e}"))?;
+fn decode_png(bytes: &[u8], raw: bool) -> Result<Bitmap, String> {
     let mut decoder = png::Decoder::new_with_limits(
-        std::io::BufReader::new(file),
+        std::io::Cursor::new(bytes),
         png::Limits {
             bytes: MAX_PNG_BYTES,
         },
@@ -281,6 +310,13 @@ fn load_png(path: &Path, raw: bool) -> Result<Bitmap, String> {
             "PNG texture too large ({size} bytes decoded, at most {MAX_PNG_BYTES})"
         ));
     }
+    // The decoded samples and the linear pixels made from them, both sized by the header.
+    let (w, h) = reader.info().size();
+    let pixels = w as u64 * h as u64;
+    crate::check_allocation(
+        (size as u64).saturating_add(pixels.saturating_mul(std::mem::size_of::<Color>() as u64)),
+    )
+    .map_err(|e| format!("the PNG texture's header claims {w} × {h} pixels, which {e}"))?;
     let mut buf = vec![0u8; size];
     let info = reader
         .next_frame(&mut buf)
@@ -406,6 +442,17 @@ impl Texture {
             Texture::Constant(c) => *c,
             Texture::Bitmap(b) => b.bitmap.mean(),
             Texture::Checkerboard { color0, color1, .. } => 0.5 * (*color0 + *color1),
+        }
+    }
+
+    /// The largest value of any channel the texture takes anywhere.
+    pub fn max(&self) -> f32 {
+        match self {
+            Texture::Constant(c) => c.max_element(),
+            Texture::Bitmap(b) => b.bitmap.max(),
+            Texture::Checkerboard { color0, color1, .. } => {
+                color0.max_element().max(color1.max_element())
+            }
         }
     }
 

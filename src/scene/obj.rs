@@ -11,7 +11,7 @@ use std::collections::HashMap;
 use std::path::Path;
 
 pub fn load_obj(path: &Path) -> Result<TriangleMesh, SceneError> {
-    let text = std::fs::read_to_string(path)
+    let text = crate::input::read_text(path)
         .map_err(|e| SceneError::new(path, None, format!("cannot read mesh file: {e}")))?;
     parse_obj(path, &text)
 }

@@ -52,7 +52,7 @@ impl PlyMesh {
 
 /// Reads a PLY file.
 pub fn load_ply(path: &Path) -> Result<PlyMesh, SceneError> {
-    let data = std::fs::read(path)
+    let data = crate::input::read(path)
         .map_err(|e| SceneError::new(path, None, format!("cannot read mesh file: {e}")))?;
     parse_ply(path, &data)
 }

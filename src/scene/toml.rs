@@ -234,15 +234,10 @@ impl Ctx<'_> {
                 format!("'{key}' must be a colour (a number or [r, g, b]), not a texture name"),
             );
         };
-        if !c.is_finite() || c.min_element() < 0.0 {
-            return self.err(v.span(), format!("'{key}' must be finite and not negative"));
+        match crate::texture::color_fault(c, max) {
+            Some(f) => self.err(v.span(), format!("'{key}' {f}")),
+            None => Ok(c),
         }
-        if let Some(m) = max {
-            if c.max_element() > m {
-                return self.err(v.span(), format!("'{key}' must be at most {m} in every channel (a surface cannot reflect more light than it receives)"));
-            }
-        }
-        Ok(c)
     }
 }
 
@@ -257,13 +252,25 @@ impl Ctx<'_> {
     ) -> Result<(Color, Option<u32>), SceneError> {
         match v.get_ref() {
             ColorT::Texture(name) => match tex.ids.get(name.as_str()) {
-                Some(&i) => Ok((tex.list[i as usize].mean(), Some(i))),
+                // A texture as a reflectance obeys the rule of a constant one, texel by texel.
+                Some(&i) => match crate::texture::color_fault(Color::splat(tex.list[i as usize].max()), Some(1.0)) {
+                    Some(f) => self.err(
+                        v.span(),
+                        format!(
+                            "'{key}': texture '{}' has values up to {}; a reflectance {f}",
+                            crate::input::shorten(name),
+                            tex.list[i as usize].max()
+                        ),
+                    ),
+                    None => Ok((tex.list[i as usize].mean(), Some(i))),
+                },
                 None => {
                     let known: Vec<&str> = tex.ids.keys().copied().collect();
                     self.err(
                         v.span(),
                         format!(
-                            "unknown texture '{name}' in '{key}' (defined: {}); give a colour or the name of a [texture.NAME]",
+                            "unknown texture '{}' in '{key}' (defined: {}); give a colour or the name of a [texture.NAME]",
+                            crate::input::shorten(name),
                             list_or_none(&known)
                         ),
                     )
@@ -335,7 +342,7 @@ fn span_of<T>(v: &Option<Spanned<T>>) -> Option<std::ops::Range<usize>> {
 
 /// Loads a native TOML scene.
 pub fn load_toml(path: &Path) -> Result<SceneDesc, SceneError> {
-    let text = std::fs::read_to_string(path)
+    let text = crate::input::read_text(path)
         .map_err(|e| SceneError::new(path, None, format!("cannot read scene file: {e}")))?;
     parse_toml(path, &text)
 }
@@ -620,12 +627,12 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                                 ),
                             );
                         }
-                        if !p.is_file() {
+                        if let Some(why) = crate::input::file_problem(&p) {
                             return cx.err(
                                 f.span(),
                                 format!(
-                                    "mesh file '{}' not found (looked for {})",
-                                    f.get_ref(),
+                                    "mesh file '{}' {why} (looked for {})",
+                                    crate::input::shorten(f.get_ref()),
                                     p.display()
                                 ),
                             );
@@ -1033,12 +1040,12 @@ fn texture(cx: &Ctx, t: &Spanned<TextureT>, base: &Path) -> Result<Texture, Scen
             )?;
             let f = cx.need(&v.file, "file", what, &at)?;
             let p = base.join(f.get_ref());
-            if !p.is_file() {
+            if let Some(why) = crate::input::file_problem(&p) {
                 return cx.err(
                     f.span(),
                     format!(
-                        "texture file '{}' not found (looked for {})",
-                        f.get_ref(),
+                        "texture file '{}' {why} (looked for {})",
+                        crate::input::shorten(f.get_ref()),
                         p.display()
                     ),
                 );

@@ -104,7 +104,7 @@ impl Reader {
             Some((f, pos)) => SceneError::new(f, Some(pos), msg),
             None => SceneError::new(path, None, msg),
         };
-        let text = std::fs::read_to_string(path)
+        let text = crate::input::read_text(path)
             .map_err(|e| fail(format!("cannot read '{}': {e}", path.display())))?;
         let canon = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
         if self.stack.contains(&canon) {

@@ -370,11 +370,12 @@ impl<'a> Builder<'a> {
                     .ok_or_else(|| self.doc.err(e, "a bitmap texture needs a 'filename'"))?;
                 let raw = p.bool("raw", false)?;
                 let path = self.path_of(e, name);
-                if !path.is_file() {
+                if let Some(why) = crate::input::file_problem(&path) {
                     return Err(self.doc.err(
                         e,
                         format!(
-                            "texture file '{name}' not found (looked for {})",
+                            "texture file '{}' {why} (looked for {})",
+                            crate::input::shorten(name),
                             path.display()
                         ),
                     ));
@@ -648,11 +649,12 @@ impl<'a> Builder<'a> {
                         .err(e, format!("a {kind} shape needs a 'filename'"))
                 })?;
                 let path = self.path_of(e, name);
-                if !path.is_file() {
+                if let Some(why) = crate::input::file_problem(&path) {
                     return Err(self.doc.err(
                         e,
                         format!(
-                            "mesh file '{name}' not found (looked for {})",
+                            "mesh file '{}' {why} (looked for {})",
+                            crate::input::shorten(name),
                             path.display()
                         ),
                     ));
