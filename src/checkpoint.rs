@@ -26,13 +26,15 @@ pub struct Checkpoint {
     pub next: Vec<u32>,
 }
 
-/// The default checkpoint path of an output image: `DIR/STEM.checkpoint.exr`.
+/// The default checkpoint path of an output image: `DIR/STEM.checkpoint.exr`, with the stem
+/// cut short and a hash of it added where that name would be too long for the file system
+/// ([`crate::image::fit_file_name`]).
 pub fn default_path(output: &Path) -> PathBuf {
     let stem = output
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    output.with_file_name(format!("{stem}.checkpoint.exr"))
+    output.with_file_name(crate::image::fit_file_name("", &stem, ".checkpoint.exr"))
 }
 
 impl Checkpoint {

@@ -146,8 +146,20 @@ pub fn linear_to_srgb(v: f32) -> f32 {
 }
 
 /// Checks, before a long render, that an image can be written at `path`: the format is known,
-/// the directory exists and a file can be created in it.
+/// the name is a file's (not `DIR/`), the directory exists and a file can be created in it,
+/// and what stands at `path` already, if anything, is a regular file that may be written
+/// (not a directory, a device, an immutable or a read-only file). Removes the temporaries of
+/// earlier runs for this path that were killed while writing ([`clean_stale_temps`]).
 pub fn check_output_path(path: &Path) -> Result<Format, ImageError> {
+    let refuse = |why: &str| ImageError::NotWritable {
+        path: path.to_path_buf(),
+        source: std::io::Error::other(why.to_string()),
+    };
+    if path.as_os_str().as_encoded_bytes().ends_with(b"/") {
+        return Err(refuse(
+            "the name ends with '/': it names a directory, not an image file",
+        ));
+    }
     let format = Format::from_path(path)?;
     let dir = parent_dir(path);
     if !dir.is_dir() {
@@ -156,6 +168,23 @@ pub fn check_output_path(path: &Path) -> Result<Format, ImageError> {
             dir,
         });
     }
+    match std::fs::metadata(path) {
+        Ok(m) if m.is_dir() => return Err(refuse("it is a directory")),
+        Ok(m) if !m.is_file() => return Err(refuse("it is not a regular file")),
+        Ok(_) => {
+            // Opening for writing without truncating changes nothing, and fails for an
+            // immutable or read-only file that the rename at the end would fail on or
+            // silently replace.
+            if let Err(source) = std::fs::OpenOptions::new().write(true).open(path) {
+                return Err(ImageError::NotWritable {
+                    path: path.to_path_buf(),
+                    source,
+                });
+            }
+        }
+        Err(_) => {}
+    }
+    clean_stale_temps(path);
     let probe = temp_path(path);
     match std::fs::File::create(&probe) {
         Ok(_) => {
@@ -169,6 +198,48 @@ pub fn check_output_path(path: &Path) -> Result<Format, ImageError> {
     }
 }
 
+/// Whether two paths name the same file: the same device and inode where both exist, else
+/// the same canonical directory and file name.
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        if let (Ok(x), Ok(y)) = (std::fs::metadata(a), std::fs::metadata(b)) {
+            return (x.dev(), x.ino()) == (y.dev(), y.ino());
+        }
+    }
+    let resolve = |p: &Path| {
+        let dir = parent_dir(p);
+        (
+            dir.canonicalize().unwrap_or(dir),
+            p.file_name().map(|n| n.to_owned()),
+        )
+    };
+    resolve(a) == resolve(b)
+}
+
+/// Longest file name most file systems take (NAME_MAX), in bytes.
+const NAME_MAX: usize = 255;
+
+/// `prefix + name + suffix`, or, where that is longer than [`NAME_MAX`], `name` cut short and
+/// followed by a hash of the whole of it (so different long names stay different).
+pub fn fit_file_name(prefix: &str, name: &str, suffix: &str) -> String {
+    let whole = format!("{prefix}{name}{suffix}");
+    if whole.len() <= NAME_MAX {
+        return whole;
+    }
+    // FNV-1a: stable across runs, so a later run finds the same name.
+    let hash = name.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+        (h ^ b as u64).wrapping_mul(0x100_0000_01b3)
+    });
+    let tag = format!("~{hash:016x}");
+    let mut keep = NAME_MAX.saturating_sub(prefix.len() + tag.len() + suffix.len());
+    while keep > 0 && !name.is_char_boundary(keep) {
+        keep -= 1;
+    }
+    format!("{prefix}{}{tag}{suffix}", &name[..keep.min(name.len())])
+}
+
 fn parent_dir(path: &Path) -> PathBuf {
     match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
@@ -176,12 +247,49 @@ fn parent_dir(path: &Path) -> PathBuf {
     }
 }
 
-fn temp_path(path: &Path) -> PathBuf {
+/// The part of a temporary's name before its process id: `.NAME.` (shortened where the
+/// whole would be too long a file name).
+fn temp_prefix(path: &Path) -> String {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    parent_dir(path).join(format!(".{name}.{}.tmp", std::process::id()))
+    // Room for the longest process id (u32) and ".tmp".
+    let long = fit_file_name(".", &name, ".4294967295.tmp");
+    format!("{}.", long.trim_end_matches(".4294967295.tmp"))
+}
+
+/// The temporary file an image is written to before the rename: `DIR/.NAME.PID.tmp`.
+fn temp_path(path: &Path) -> PathBuf {
+    parent_dir(path).join(format!("{}{}.tmp", temp_prefix(path), std::process::id()))
+}
+
+/// Removes the temporaries `.NAME.PID.tmp` of `path` whose process no longer runs (killed
+/// while writing, e.g. by SIGKILL). Only where the running processes can be listed
+/// (/proc); others' temporaries are left alone.
+pub fn clean_stale_temps(path: &Path) {
+    if !Path::new("/proc/self").exists() {
+        return;
+    }
+    let prefix = temp_prefix(path);
+    let Ok(entries) = std::fs::read_dir(parent_dir(path)) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let name = e.file_name();
+        let Some(pid) = name
+            .to_str()
+            .and_then(|n| n.strip_prefix(&prefix))
+            .and_then(|n| n.strip_suffix(".tmp"))
+            .and_then(|n| n.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        let alive = Path::new("/proc").join(pid.to_string()).exists();
+        if !alive && e.file_type().is_ok_and(|t| t.is_file()) {
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
 }
 
 /// Writes the image in the format the extension names, atomically (temporary file + rename).

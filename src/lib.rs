@@ -19,6 +19,7 @@ pub mod image;
 pub mod input;
 pub mod integrator;
 pub mod light;
+pub mod limits;
 pub mod material;
 pub mod parts;
 pub mod photon;
@@ -266,25 +267,71 @@ pub fn resolve_settings(
     let width = over.width.or(file.width).unwrap_or(DEFAULT_SIZE);
     let height = over.height.or(file.height).unwrap_or(DEFAULT_SIZE);
     let spp = over.spp.or(file.spp).unwrap_or(DEFAULT_SPP);
-    if width == 0 || height == 0 || spp == 0 {
-        return Err(Error::Usage(
-            "width, height and spp must be at least 1".into(),
-        ));
-    }
     let shadow_rays = over.shadow_rays.or(file.shadow_rays).unwrap_or(1);
-    if shadow_rays == 0 {
-        return Err(Error::Usage("--shadow-rays must be at least 1".into()));
+    let rr_depth = over.rr_depth.or(file.rr_depth).unwrap_or(5);
+    let max_depth = over.max_depth.or(file.max_depth);
+    // Every count within its bound (limits.rs), named by its flag where a flag gave it.
+    let bound = |flag: &str, given: bool, v: u64, min: u64, max: u64| {
+        let name = if given {
+            flag.to_string()
+        } else {
+            format!(
+                "the scene's {}",
+                flag.trim_start_matches("--").replace('-', "_")
+            )
+        };
+        limits::check(&name, v, min, max).map_err(Error::Usage)
+    };
+    use limits::*;
+    bound("--width", over.width.is_some(), width as u64, 1, MAX_SIZE)?;
+    bound(
+        "--height",
+        over.height.is_some(),
+        height as u64,
+        1,
+        MAX_SIZE,
+    )?;
+    bound("--spp", over.spp.is_some(), spp as u64, 1, MAX_SPP)?;
+    let shadow_flag = over.shadow_rays.is_some();
+    bound(
+        "--shadow-rays",
+        shadow_flag,
+        shadow_rays as u64,
+        1,
+        MAX_SHADOW_RAYS,
+    )?;
+    bound(
+        "--rr-depth",
+        over.rr_depth.is_some(),
+        rr_depth as u64,
+        1,
+        MAX_RR_DEPTH,
+    )?;
+    if let Some(d) = max_depth {
+        bound(
+            "--max-depth",
+            over.max_depth.is_some(),
+            d as u64,
+            0,
+            limits::MAX_DEPTH,
+        )?;
+    }
+    if let Some(t) = threads {
+        bound("--threads", true, t as u64, 1, MAX_THREADS)?;
     }
     let rr = match over.rr_survival.or(file.rr_survival) {
-        Some(p) if !(p > 0.0 && p < 1.0) => {
+        Some(p) if !(p > 0.0 && p <= MAX_RR_SURVIVAL) => {
+            let name = match over.rr_survival {
+                Some(_) => "--rr-survival",
+                None => "the scene's rr_survival",
+            };
             return Err(Error::Usage(format!(
-                "--rr-survival must be between 0 and 1 (exclusive), got {p}"
-            )))
+                "{name} must be between 0 and 1 (exclusive) and at most {MAX_RR_SURVIVAL}, \
+                 got {p}"
+            )));
         }
         Some(p) => RussianRoulette::Fixed(p),
-        None => RussianRoulette::Throughput {
-            start: over.rr_depth.or(file.rr_depth).unwrap_or(5),
-        },
+        None => RussianRoulette::Throughput { start: rr_depth },
     };
     let crop = match over.crop {
         Some(c) => Some(c),
@@ -292,7 +339,9 @@ pub fn resolve_settings(
         None => file.crop,
     };
     if let Some([x, y, w, h]) = crop {
-        if w == 0 || h == 0 || x + w > width || y + h > height {
+        // Checked sums: a window past u32::MAX does not fit either.
+        let fits = |o: u32, n: u32, size: u32| n > 0 && o.checked_add(n).is_some_and(|e| e <= size);
+        if !(fits(x, w, width) && fits(y, h, height)) {
             return Err(Error::Usage(format!(
                 "the crop window ({x}, {y}) + ({w} × {h}) does not fit in the {width} × {height} image"
             )));
@@ -309,7 +358,7 @@ pub fn resolve_settings(
                 .integrator
                 .or(file.integrator)
                 .unwrap_or(IntegratorKind::Path),
-            max_depth: over.max_depth.or(file.max_depth),
+            max_depth,
             shadow_rays,
             rr,
             hide_emitters: over.hide_emitters.or(file.hide_emitters).unwrap_or(false),

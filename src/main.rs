@@ -75,11 +75,31 @@ struct PhotonArgs {
 
 impl PhotonArgs {
     fn params(&self) -> Result<mcrt::integrator::PhotonParams, Error> {
-        if self.iterations == 0 || self.photons_per_iteration == 0 || self.gather_photons == 0 {
-            return Err(Error::Usage(
-                "--iterations, --photons-per-iteration and --gather-photons must be at least 1"
-                    .into(),
-            ));
+        use mcrt::limits::*;
+        for (flag, v, min, max) in [
+            ("--photons", self.photons, 0, MAX_PHOTONS),
+            ("--caustic-photons", self.caustic_photons, 0, MAX_PHOTONS),
+            (
+                "--gather-photons",
+                self.gather_photons as u64,
+                1,
+                MAX_GATHER_PHOTONS,
+            ),
+            (
+                "--final-gather",
+                self.final_gather as u64,
+                0,
+                MAX_FINAL_GATHER,
+            ),
+            ("--iterations", self.iterations as u64, 1, MAX_ITERATIONS),
+            (
+                "--photons-per-iteration",
+                self.photons_per_iteration,
+                1,
+                MAX_PHOTONS,
+            ),
+        ] {
+            check(flag, v, min, max).map_err(Error::Usage)?;
         }
         if let Some(r) = self.initial_radius {
             if !(r > 0.0 && r.is_finite()) {
@@ -254,8 +274,8 @@ struct RenderArgs {
 
 #[derive(clap::Args)]
 struct ImageArgs {
-    /// Exposure in stops for PNG output (pixel values times 2^EV).
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    /// Exposure in stops for PNG output (pixel values times 2^EV), from -64 to 64.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse_exposure)]
     exposure: f32,
     /// Tone map for PNG output.
     #[arg(long, value_enum, default_value = "clamp")]
@@ -310,11 +330,33 @@ struct CompareArgs {
     diff_range: Option<f64>,
 }
 
+/// `--exposure`: a finite number of stops within ±[`mcrt::limits::MAX_EXPOSURE`] (NaN would
+/// write a black image, infinity a white or black one).
+fn parse_exposure(text: &str) -> Result<f32, String> {
+    let max = mcrt::limits::MAX_EXPOSURE;
+    match text.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && v.abs() <= max => Ok(v),
+        Ok(v) => Err(format!(
+            "expected a finite number of stops from -{max} to {max}, got {v}"
+        )),
+        Err(_) => Err(format!("expected a number of stops, got '{text}'")),
+    }
+}
+
 /// Exit status after an interrupted render (128 + SIGINT, as shells report it).
 const INTERRUPTED: i32 = 130;
 
-/// Set by SIGINT or SIGTERM: the render stops at the next tile.
+/// Set by SIGINT or SIGTERM while rendering: the render stops within a few samples per
+/// thread, writes what it has and exits with [`INTERRUPTED`].
 static CANCEL: AtomicBool = AtomicBool::new(false);
+
+/// True until the render begins: a signal while the scene loads ends the process at once,
+/// writing nothing (an existing output stays as it was).
+static LOADING: AtomicBool = AtomicBool::new(true);
+
+/// Signals closer together than this count as one: `timeout` and a terminal's Ctrl-C signal
+/// the whole process group, so one request can arrive twice at once.
+const SIGNAL_BURST: std::time::Duration = std::time::Duration::from_millis(500);
 
 fn main() {
     let cli = Cli::parse();
@@ -334,14 +376,30 @@ fn main() {
     }
 }
 
-/// Catches SIGINT and SIGTERM: the first sets [`CANCEL`] (the render writes the image and a
-/// checkpoint and exits with status 130); a second one exits at once.
+/// Catches SIGINT, SIGTERM and SIGHUP (the handler runs on its own thread). While the scene
+/// loads ([`LOADING`]), a signal exits at once with status 130 and nothing written. While
+/// rendering, the first sets [`CANCEL`] (the render writes its image, and a checkpoint where
+/// it has one, and exits with 130); further signals within [`SIGNAL_BURST`] of it are the same
+/// request; a later one exits at once.
 fn catch_signals() {
+    static FIRST: std::sync::OnceLock<Instant> = std::sync::OnceLock::new();
     let _ = ctrlc::set_handler(|| {
-        if CANCEL.swap(true, Ordering::SeqCst) {
+        if LOADING.load(Ordering::SeqCst) {
+            eprintln!("interrupted while loading the scene: nothing written");
+            std::process::exit(INTERRUPTED);
+        }
+        let first = *FIRST.get_or_init(Instant::now);
+        CANCEL.store(true, Ordering::SeqCst);
+        if first.elapsed() > SIGNAL_BURST {
+            eprintln!("interrupted again: exiting without saving");
             std::process::exit(INTERRUPTED);
         }
     });
+}
+
+/// The scene is loaded: from now on a signal stops the render instead of the process.
+fn start_rendering() {
+    LOADING.store(false, Ordering::SeqCst);
 }
 
 /// Renders; returns the exit status (0, or 130 when interrupted).
@@ -397,7 +455,11 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
                 checkpoint_path.display()
             )));
         }
+        distinct_files(&[("-o", &output), ("--checkpoint", &checkpoint_path)])?;
         catch_signals();
+    }
+    if let Some(r) = &a.resume {
+        distinct_files(&[("-o", &output), ("--resume", r)])?;
     }
     let t_load = Instant::now();
     let load = mcrt::LoadOptions {
@@ -471,8 +533,9 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
     let (_, _, fw, fh) = settings.window();
     let npix = fw as u64 * fh as u64;
     let extra = format!("defines={:?} lenient={}", a.define, a.lenient);
+    start_rendering();
     if settings.params.kind == IntegratorKind::Sppm {
-        return render_photon(&a, &scene, &settings, &output, load_time);
+        return render_sppm(&a, &scene, &settings, &output, load_time);
     }
     if let Some(pass) = a.pass {
         return render_pass(
@@ -730,8 +793,38 @@ fn render_pass(
     Ok(0)
 }
 
+/// Refuses two of the named paths that are the same file (an output written over another
+/// output, or over an input still needed).
+fn distinct_files(paths: &[(&str, &std::path::Path)]) -> Result<(), Error> {
+    for (i, (fa, pa)) in paths.iter().enumerate() {
+        for (fb, pb) in &paths[i + 1..] {
+            if mcrt::image::same_file(pa, pb) {
+                return Err(Error::Usage(format!(
+                    "{fa} {} and {fb} {} are the same file; give them different names",
+                    pa.display(),
+                    pb.display()
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
 fn merge(a: MergeArgs) -> Result<(), Error> {
     check_output_path(&a.output)?;
+    let mut named: Vec<(&str, &std::path::Path)> = vec![("-o", &a.output)];
+    if let Some(k) = &a.keep_sums {
+        named.push(("--keep-sums", k));
+    }
+    let outputs = named.len();
+    named.extend(a.parts.iter().map(|p| ("part", p.as_path())));
+    // Outputs against each other and against the parts (a part given twice is merge's to
+    // report).
+    for i in 0..outputs {
+        for &other in &named[i + 1..] {
+            distinct_files(&[named[i], other])?;
+        }
+    }
     if let Some(k) = &a.keep_sums {
         if check_output_path(k)? != Format::Exr {
             return Err(Error::Usage(format!(
@@ -756,6 +849,8 @@ fn merge(a: MergeArgs) -> Result<(), Error> {
 fn compare(a: CompareArgs) -> Result<(), Error> {
     if let Some(d) = &a.diff {
         check_output_path(d)?;
+        distinct_files(&[("--diff", d), ("A", &a.a)])?;
+        distinct_files(&[("--diff", d), ("B", &a.b)])?;
     }
     if let Some(r) = a.diff_range {
         if !(r > 0.0 && r.is_finite()) {
@@ -795,9 +890,9 @@ fn compare(a: CompareArgs) -> Result<(), Error> {
     Ok(())
 }
 
-/// `photon` and `sppm`: the photon maps are traced for the whole image, so these render in
-/// one go (no sample passes, budgets, checkpoints or AOVs).
-fn render_photon(
+/// `sppm`: each iteration shrinks the radii the next one uses, so it renders in one go (no
+/// sample passes, budgets, checkpoints or AOVs).
+fn render_sppm(
     a: &RenderArgs,
     scene: &Scene,
     settings: &mcrt::render::RenderSettings,
@@ -811,17 +906,15 @@ fn render_photon(
         || a.write_partial.is_some()
         || a.aov.is_some()
     {
-        return Err(Error::Usage(format!(
-            "--integrator {} renders the whole image at once: --pass, --time, --target-noise, \
-             --resume, --write-partial and --aov apply to path, direct and photon",
-            settings.params.kind.name()
-        )));
+        return Err(Error::Usage(
+            "--integrator sppm renders the whole image at once: --pass, --time, \
+             --target-noise, --resume, --write-partial and --aov apply to path, direct and \
+             photon"
+                .into(),
+        ));
     }
     let (_, _, fw, fh) = settings.window();
-    let passes = match settings.params.kind {
-        IntegratorKind::Sppm => settings.params.photon.iterations,
-        _ => settings.spp,
-    };
+    let passes = settings.params.photon.iterations;
     let show = !a.quiet && std::io::stderr().is_terminal();
     let bar = if show {
         let b = ProgressBar::new(fw as u64 * fh as u64 * passes as u64);
@@ -833,9 +926,19 @@ fn render_photon(
     } else {
         ProgressBar::hidden()
     };
-    let (film, stats) = mcrt::render::render(scene, settings, &|n| bar.inc(n))?;
+    let stop = || CANCEL.load(Ordering::SeqCst);
+    let (film, stats) = mcrt::render::render_until(scene, settings, &|n| bar.inc(n), &stop)?;
     bar.finish_and_clear();
     write_image(output, &film.image(), &a.image.options())?;
+    if stats.interrupted {
+        // No checkpoint: each iteration's radii depend on all the iterations before it.
+        eprintln!(
+            "{}: interrupted; the image holds what was rendered ({} samples)",
+            output.display(),
+            stats.samples
+        );
+        return Ok(INTERRUPTED);
+    }
     if !a.quiet {
         let secs = stats.elapsed.as_secs_f64().max(1e-9);
         let rays = stats.rays.rays + stats.rays.shadow_rays;
@@ -845,7 +948,7 @@ fn render_photon(
             fw,
             fh,
             passes,
-            if settings.params.kind == IntegratorKind::Sppm { "iterations" } else { "spp" },
+            "iterations",
             settings.params.kind.name(),
             scene.prim_count(),
             scene.lights.lights.len() + scene.lights.others.len(),

@@ -154,7 +154,22 @@ pub fn render_progressive<E: From<RenderError>>(
 ) -> Result<Outcome, E> {
     let start = Instant::now();
     let deadline = budget.time.map(|t| start + t);
-    let integrator = integrator::prepare(scene, s)?;
+    let stop = || cancel.load(Ordering::SeqCst) || deadline.is_some_and(|d| Instant::now() >= d);
+    let integrator = match integrator::prepare(scene, s, &stop) {
+        Err(RenderError::Interrupted) => {
+            let why = match cancel.load(Ordering::SeqCst) {
+                true => Stop::Interrupted,
+                false => Stop::Time,
+            };
+            return Ok(Outcome {
+                stop: why,
+                stats: RenderStats::default(),
+                passes: 0,
+                noise: None,
+            });
+        }
+        r => r?,
+    };
     let cap = budget.spp.unwrap_or(u32::MAX);
     let npix = next.len().max(1) as f64;
     let mut stats = RenderStats::default();
@@ -243,8 +258,6 @@ pub fn render_progressive<E: From<RenderError>>(
             // Adaptive: every pixel below the target that could take more is at the cap.
             return out(Stop::Spp, stats, passes, noise);
         }
-        let stop =
-            || cancel.load(Ordering::SeqCst) || deadline.is_some_and(|d| Instant::now() >= d);
         let st = render_ranges(
             &*integrator,
             scene,

@@ -93,6 +93,8 @@ pub struct RenderStats {
     pub photon_time: Duration,
     /// Tiles skipped because the render was told to stop ([`render_ranges`]).
     pub skipped_tiles: u64,
+    /// The render was told to stop before it rendered every sample it was asked for.
+    pub interrupted: bool,
 }
 
 impl RenderStats {
@@ -106,6 +108,7 @@ impl RenderStats {
             self.first_dropped = o.first_dropped;
         }
         self.skipped_tiles += o.skipped_tiles;
+        self.interrupted |= o.interrupted;
         self.photons_stored += o.photons_stored;
         self.photon_bytes += o.photon_bytes;
         self.photon_time += o.photon_time;
@@ -123,6 +126,9 @@ pub enum RenderError {
     /// An integrator or backend that cannot render these settings.
     #[error("{0}")]
     Unsupported(String),
+    /// Told to stop while the integrator was being made ready (photon maps).
+    #[error("interrupted before rendering began")]
+    Interrupted,
 }
 
 /// The camera the settings name, built for the image size.
@@ -147,7 +153,7 @@ pub fn render_samples(
     count: u32,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<RenderStats, RenderError> {
-    let integrator = integrator::prepare(scene, s)?;
+    let integrator = integrator::prepare(scene, s, &|| false)?;
     let mut next = vec![first; film.count.len()];
     let until = |_| first + count;
     let mut stats = integrator.setup_stats();
@@ -259,7 +265,9 @@ pub fn render_ranges(
             let (x1, y1) = ((x0 + TILE).min(fw), (y0 + TILE).min(fh));
             let index = |x: u32, y: u32| (y * fw + x) as usize;
             if stop() {
-                shared.lock().unwrap().2.skipped_tiles += 1;
+                let mut g = shared.lock().unwrap();
+                g.2.skipped_tiles += 1;
+                g.2.interrupted = true;
                 return;
             }
             // Continue each pixel's running sums from the film, so that rendering samples in
@@ -277,8 +285,7 @@ pub fn render_ranges(
                     .unzip()
             };
             let mut stats = RenderStats::default();
-            let n: u64 = ranges.iter().map(|&(a, b)| (b - a) as u64).sum();
-            let pixels: Vec<TilePixel> = (y0..y1)
+            let mut pixels: Vec<TilePixel> = (y0..y1)
                 .flat_map(|y| (x0..x1).map(move |x| (x, y)))
                 .zip(&ranges)
                 .map(|((x, y), &samples)| TilePixel {
@@ -289,7 +296,19 @@ pub fn render_ranges(
                     samples,
                 })
                 .collect();
-            render_tile(integrator, s, &camera, &pixels, &mut sums, &mut stats);
+            // Each pixel reached `done[k]`: its end unless the render was told to stop.
+            let done = render_tile_steps(
+                integrator,
+                s,
+                &camera,
+                &mut pixels,
+                &mut sums,
+                &mut stats,
+                stop,
+            );
+            let ranges: Vec<(u32, u32)> =
+                ranges.iter().zip(&done).map(|(r, &d)| (r.0, d)).collect();
+            let n: u64 = ranges.iter().map(|&(a, b)| (b - a) as u64).sum();
             {
                 let mut g = shared.lock().unwrap();
                 let (film, next, total) = &mut *g;
@@ -302,6 +321,7 @@ pub fn render_ranges(
                     }
                 }
                 total.samples += n;
+                total.interrupted |= stats.interrupted;
                 total.rays.add(&stats.rays);
                 total.dropped += stats.dropped;
                 // Keep the first dropped pixel in scan order, whatever the thread timing.
@@ -320,17 +340,125 @@ pub fn render_ranges(
     Ok(stats)
 }
 
+/// Samples per call of [`render_tile`] when one sample casts one shadow ray: between
+/// two calls the render asks whether to stop, so a stop takes effect within about this much
+/// work per thread, however many samples a pixel has.
+const STEP_SAMPLES: u64 = 1024;
+
+/// Samples per step: [`STEP_SAMPLES`] divided by the shadow and final-gather rays a sample
+/// casts at each vertex, so a step takes about as long with 1 or 1024 of them.
+fn step_samples(s: &RenderSettings) -> u64 {
+    let p = &s.params;
+    let mut per_vertex = p.shadow_rays.max(1) as u64;
+    if p.kind == IntegratorKind::Photon {
+        per_vertex += p.photon.final_gather as u64;
+    }
+    (STEP_SAMPLES / per_vertex).max(1)
+}
+
+/// Renders a tile's pixels (samples `pixels[k].samples` into `sums[k]`) in steps of about
+/// [`step_samples`] samples, a few samples of a group of pixels each, asking `stop` before
+/// each step. Every pixel's samples are still added in index order, so the sums are the same
+/// bits as in one call. Returns, for each pixel, the end of the samples it rendered: its
+/// range's end, or less if `stop` answered true (then `stats.interrupted` is set).
+fn render_tile_steps(
+    integrator: &dyn Integrator,
+    s: &RenderSettings,
+    camera: &crate::camera::Camera,
+    pixels: &mut [TilePixel],
+    sums: &mut [PixelSums],
+    stats: &mut RenderStats,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Vec<u32> {
+    let step = step_samples(s);
+    let npix = pixels.len().max(1) as u64;
+    // Samples per pixel and pixels per step.
+    let per_pixel = (step / npix).clamp(1, u32::MAX as u64) as u32;
+    let group = (step / per_pixel as u64).clamp(1, npix) as usize;
+    let ends: Vec<u32> = pixels.iter().map(|p| p.samples.1).collect();
+    let mut done: Vec<u32> = pixels.iter().map(|p| p.samples.0).collect();
+    while done.iter().zip(&ends).any(|(d, e)| d < e) {
+        for start in (0..pixels.len()).step_by(group) {
+            let end = (start + group).min(pixels.len());
+            if (start..end).all(|k| done[k] >= ends[k]) {
+                continue;
+            }
+            if stop() {
+                stats.interrupted = true;
+                return done;
+            }
+            for k in start..end {
+                let to = done[k].saturating_add(per_pixel).min(ends[k]);
+                pixels[k].samples = (done[k], to);
+            }
+            render_tile(
+                integrator,
+                s,
+                camera,
+                &pixels[start..end],
+                &mut sums[start..end],
+                stats,
+            );
+            for k in start..end {
+                done[k] = pixels[k].samples.1;
+            }
+        }
+    }
+    done
+}
+
 /// Renders the whole image at `s.spp` samples per pixel (`sppm`: `iterations` passes).
 pub fn render(
     scene: &Scene,
     s: &RenderSettings,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<(Film, RenderStats), RenderError> {
+    render_until(scene, s, progress, &|| false)
+}
+
+/// [`render`], asking `stop` while it works (between steps of a tile's samples, photon
+/// chunks and SPPM iterations). Once it answers true the render ends soon with what it has:
+/// every pixel holds a prefix of its samples (none where the photon maps were not finished),
+/// and `stats.interrupted` is set.
+pub fn render_until(
+    scene: &Scene,
+    s: &RenderSettings,
+    progress: &(dyn Fn(u64) + Sync),
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Result<(Film, RenderStats), RenderError> {
     let (_, _, w, h) = s.window();
     let mut film = Film::new(w, h);
     if s.params.kind == IntegratorKind::Sppm {
-        return integrator::sppm::render_sppm(scene, s, progress, &mut |_, _| {}, &|_| false);
+        return integrator::sppm::render_sppm_until(
+            scene,
+            s,
+            progress,
+            &mut |_, _| {},
+            &|_| false,
+            stop,
+        );
     }
-    let stats = render_samples(scene, s, &mut film, 0, s.spp, progress)?;
+    let integrator = match integrator::prepare(scene, s, stop) {
+        Err(RenderError::Interrupted) => {
+            let stats = RenderStats {
+                interrupted: true,
+                ..Default::default()
+            };
+            return Ok((film, stats));
+        }
+        r => r?,
+    };
+    let mut next = vec![0; film.count.len()];
+    let mut stats = integrator.setup_stats();
+    stats.add(&render_ranges(
+        &*integrator,
+        scene,
+        s,
+        &mut film,
+        &mut next,
+        &|_| s.spp,
+        stop,
+        progress,
+    )?);
     Ok((film, stats))
 }

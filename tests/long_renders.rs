@@ -387,7 +387,7 @@ fn target_noise_meets_the_target_on_a_measured_region() {
     let s = mcrt::resolve_settings(&fs, &over, Some(1)).unwrap();
     let mut film = mcrt::film::Film::new(32, 32);
     let mut next = vec![0; 32 * 32];
-    let integrator = mcrt::integrator::prepare(&scene, &s).unwrap();
+    let integrator = mcrt::integrator::prepare(&scene, &s, &|| false).unwrap();
     mcrt::render::render_ranges(
         &*integrator,
         &scene,

@@ -173,10 +173,13 @@ pub trait Integrator: Sync {
 }
 
 /// The integrator that `s` names, ready for `scene`: the one registry of integrators.
-/// `--integrator sppm` has its own driver and is refused here.
+/// `--integrator sppm` has its own driver and is refused here. `stop` is asked during long
+/// preparations (photon tracing); once it answers true, this ends with
+/// [`RenderError::Interrupted`].
 pub fn prepare<'a>(
     scene: &'a Scene,
     s: &'a RenderSettings,
+    stop: &(dyn Fn() -> bool + Sync),
 ) -> Result<Box<dyn Integrator + 'a>, RenderError> {
     Ok(match s.params.kind {
         IntegratorKind::Path => Box::new(path::PathTracer::new(scene, s)?),
@@ -189,7 +192,7 @@ pub fn prepare<'a>(
         }
         IntegratorKind::Photon => {
             no_lanes(s)?;
-            Box::new(photon::PhotonMapping::new(scene, s)?)
+            Box::new(photon::PhotonMapping::new(scene, s, stop)?)
         }
         IntegratorKind::Sppm => {
             return Err(RenderError::Unsupported(

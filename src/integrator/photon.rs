@@ -62,9 +62,17 @@ pub struct PhotonMapping<'a> {
 }
 
 impl<'a> PhotonMapping<'a> {
-    pub fn new(scene: &'a Scene, s: &RenderSettings) -> Result<Self, RenderError> {
+    /// Ends with [`RenderError::Interrupted`] if `stop` answers true before the maps are built.
+    pub fn new(
+        scene: &'a Scene,
+        s: &RenderSettings,
+        stop: &(dyn Fn() -> bool + Sync),
+    ) -> Result<Self, RenderError> {
         crate::render::camera_for(scene, s)?;
-        let maps = crate::render::with_threads(s, || PhotonMaps::build(scene, &s.params, s.seed))?;
+        let maps = crate::render::with_threads(s, || {
+            PhotonMaps::build_until(scene, &s.params, s.seed, stop)
+        })?
+        .ok_or(RenderError::Interrupted)?;
         Ok(PhotonMapping {
             scene,
             params: s.params,

@@ -16,7 +16,7 @@ use super::RayStats;
 use crate::film::Film;
 use crate::geometry::{Frame, Ray};
 use crate::material::{Material, TransportMode};
-use crate::photon::{photon::MAX_DEPTH, trace_photons, PhotonMap, TraceOptions};
+use crate::photon::{photon::MAX_DEPTH, trace_photons_until, PhotonMap, TraceOptions};
 use crate::render::{RenderError, RenderSettings, RenderStats};
 use crate::sampler::Sampler;
 use crate::scene::{Interaction, Scene};
@@ -45,6 +45,8 @@ struct PixelState {
     n: f32,
     tau: Color,
     ld: Color,
+    /// This iteration's direct light, added to `ld` when its photon pass is done.
+    ld_it: Color,
     vp: Option<VisiblePoint>,
 }
 
@@ -62,6 +64,19 @@ pub fn render_sppm(
     on_iteration: &mut (dyn FnMut(u32, &crate::image::Image) + Send),
     snapshot: &(dyn Fn(u32) -> bool + Sync),
 ) -> Result<(Film, RenderStats), RenderError> {
+    render_sppm_until(scene, s, progress, on_iteration, snapshot, &|| false)
+}
+
+/// [`render_sppm`], asking `stop` before each iteration and while tracing photons: once it
+/// answers true the image holds the iterations completed (`stats.interrupted` set).
+pub fn render_sppm_until(
+    scene: &Scene,
+    s: &RenderSettings,
+    progress: &(dyn Fn(u64) + Sync),
+    on_iteration: &mut (dyn FnMut(u32, &crate::image::Image) + Send),
+    snapshot: &(dyn Fn(u32) -> bool + Sync),
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Result<(Film, RenderStats), RenderError> {
     let camera = crate::render::camera_for(scene, s)?;
     let (ox, oy, fw, fh) = s.window();
     let pp = &s.params.photon;
@@ -74,14 +89,20 @@ pub fn render_sppm(
             n: 0.0,
             tau: Color::ZERO,
             ld: Color::ZERO,
+            ld_it: Color::ZERO,
             vp: None,
         };
         fw as usize * fh as usize
     ];
     let mut stats = RenderStats::default();
     let iterations = pp.iterations.max(1);
+    let mut done = 0;
     let mut run = |pixels: &mut Vec<PixelState>, stats: &mut RenderStats| {
         for it in 0..iterations {
+            if stop() {
+                stats.interrupted = true;
+                return;
+            }
             // Camera pass.
             let rays: RayStats = pixels
                 .par_chunks_mut(fw as usize)
@@ -94,7 +115,7 @@ pub fn render_sppm(
                         let mut sampler = Sampler::for_sample(s.sampler, s.seed, pixel, it as u64);
                         let ray = camera.generate_ray(gx, gy, sampler.next_2d());
                         let (ld, vp) = camera_path(scene, ray, &mut sampler, s, max_depth, &mut st);
-                        px.ld += if ld.is_finite() { ld } else { Color::ZERO };
+                        px.ld_it = if ld.is_finite() { ld } else { Color::ZERO };
                         px.vp = vp;
                     }
                     st
@@ -106,7 +127,7 @@ pub fn render_sppm(
             stats.rays.add(&rays);
             // Photon pass: direct light is the camera pass's, so photons count from their
             // second segment on.
-            let traced = trace_photons(
+            let Some(traced) = trace_photons_until(
                 scene,
                 pp.photons_per_iteration,
                 &TraceOptions {
@@ -116,12 +137,17 @@ pub fn render_sppm(
                     min_depth: 2,
                     ..Default::default()
                 },
-            );
+                stop,
+            ) else {
+                stats.interrupted = true;
+                return;
+            };
             stats.rays.rays += traced.rays;
             let map = PhotonMap::build(traced.photons);
             // Gather and update.
             pixels.par_chunks_mut(fw as usize).for_each(|row| {
                 for px in row.iter_mut() {
+                    px.ld += px.ld_it;
                     let Some(vp) = px.vp.take() else { continue };
                     let (phi, m) = gather(&map, &vp, px.r2);
                     if m > 0 {
@@ -134,6 +160,7 @@ pub fn render_sppm(
                 }
             });
             progress(fw as u64 * fh as u64);
+            done = it + 1;
             if snapshot(it + 1) {
                 on_iteration(it + 1, &image_of(pixels, fw, fh, it + 1).image());
             }
@@ -148,8 +175,12 @@ pub fn render_sppm(
         None => run(&mut pixels, &mut stats),
     }
     stats.elapsed = start.elapsed();
-    stats.samples = fw as u64 * fh as u64 * iterations as u64;
-    Ok((image_of(&pixels, fw, fh, iterations), stats))
+    stats.samples = fw as u64 * fh as u64 * done as u64;
+    let film = match done {
+        0 => Film::new(fw, fh),
+        _ => image_of(&pixels, fw, fh, done),
+    };
+    Ok((film, stats))
 }
 
 /// The current estimate as a film (one "sample" a pixel).

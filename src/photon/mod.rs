@@ -11,7 +11,7 @@ pub mod visualize;
 
 pub use map::{Found, PhotonMap};
 pub use photon::Photon;
-pub use trace::{trace_photons, TraceOptions, Traced};
+pub use trace::{trace_photons, trace_photons_until, TraceOptions, Traced};
 
 use crate::geometry::Frame;
 use crate::integrator::IntegratorParams;
@@ -51,10 +51,20 @@ impl PhotonMaps {
     /// segments, camera included) bounds the photon paths: a photon used at the end of a
     /// camera path of s segments may have at most max_depth − s.
     pub fn build(scene: &Scene, params: &IntegratorParams, seed: u64) -> PhotonMaps {
+        Self::build_until(scene, params, seed, &|| false).expect("never stopped")
+    }
+
+    /// [`PhotonMaps::build`], asking `stop` while tracing: None once it answers true.
+    pub fn build_until(
+        scene: &Scene,
+        params: &IntegratorParams,
+        seed: u64,
+        stop: &(dyn Fn() -> bool + Sync),
+    ) -> Option<PhotonMaps> {
         let t0 = Instant::now();
         let md = params.max_depth.unwrap_or(u32::MAX);
         let pp = &params.photon;
-        let global = trace_photons(
+        let global = trace_photons_until(
             scene,
             pp.photons,
             &TraceOptions {
@@ -66,8 +76,9 @@ impl PhotonMaps {
                 normals: true,
                 ..Default::default()
             },
-        );
-        let caustic = trace_photons(
+            stop,
+        )?;
+        let caustic = trace_photons_until(
             scene,
             pp.caustic_photons,
             &TraceOptions {
@@ -77,7 +88,8 @@ impl PhotonMaps {
                 caustic_only: true,
                 ..Default::default()
             },
-        );
+            stop,
+        )?;
         let mut vis: Vec<Photon> = global
             .photons
             .iter()
@@ -105,7 +117,7 @@ impl PhotonMaps {
                 })
                 .collect()
         };
-        PhotonMaps {
+        Some(PhotonMaps {
             irradiance: PhotonMap::build(irr),
             global: global_map,
             caustic: PhotonMap::build(caustic.photons),
@@ -114,7 +126,7 @@ impl PhotonMaps {
             emitted_caustic: caustic.emitted,
             rays: global.rays + caustic.rays,
             build_time: t0.elapsed(),
-        }
+        })
     }
 
     pub fn memory_bytes(&self) -> usize {

@@ -79,23 +79,38 @@ pub fn light_distribution(scene: &Scene) -> Option<Distribution1D> {
 
 /// Emits `n` photons and traces them through the scene.
 pub fn trace_photons(scene: &Scene, n: u64, o: &TraceOptions) -> Traced {
+    trace_photons_until(scene, n, o, &|| false).expect("never stopped")
+}
+
+/// [`trace_photons`], asking `stop` before each chunk of photons: None once it answers true
+/// (a pass cut short would be biased, so nothing of it is kept).
+pub fn trace_photons_until(
+    scene: &Scene,
+    n: u64,
+    o: &TraceOptions,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Option<Traced> {
     let Some(dist) = light_distribution(scene) else {
-        return Traced {
+        return Some(Traced {
             emitted: n,
             ..Default::default()
-        };
+        });
     };
     let chunks = n.div_ceil(CHUNK);
-    let parts: Vec<Traced> = (0..chunks)
+    let parts: Vec<Option<Traced>> = (0..chunks)
         .into_par_iter()
         .map(|c| {
+            if stop() {
+                return None;
+            }
             let mut t = Traced::default();
             for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
                 trace_one(scene, &dist, n, i, o, &mut t);
             }
-            t
+            Some(t)
         })
         .collect();
+    let parts: Vec<Traced> = parts.into_iter().collect::<Option<_>>()?;
     let total: usize = parts.iter().map(|t| t.photons.len()).sum();
     let total_shadow: usize = parts.iter().map(|t| t.shadow.len()).sum();
     let mut out = Traced {
@@ -111,7 +126,7 @@ pub fn trace_photons(scene: &Scene, n: u64, o: &TraceOptions) -> Traced {
         out.normals.extend_from_slice(&p.normals);
         out.rays += p.rays;
     }
-    out
+    Some(out)
 }
 
 /// The random numbers of photon `i` of a pass.

@@ -253,7 +253,10 @@ impl Ctx<'_> {
         match v.get_ref() {
             ColorT::Texture(name) => match tex.ids.get(name.as_str()) {
                 // A texture as a reflectance obeys the rule of a constant one, texel by texel.
-                Some(&i) => match crate::texture::color_fault(Color::splat(tex.list[i as usize].max()), Some(1.0)) {
+                Some(&i) => match crate::texture::color_fault(
+                    Color::splat(tex.list[i as usize].max()),
+                    Some(1.0),
+                ) {
                     Some(f) => self.err(
                         v.span(),
                         format!(
@@ -780,10 +783,20 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
 }
 
 fn settings(cx: &Ctx, r: &RenderT) -> Result<FileSettings, SceneError> {
+    // Each count within its bound (crate::limits).
     let positive = |v: &Option<Spanned<u32>>, key: &str| -> Result<Option<u32>, SceneError> {
+        use crate::limits::*;
+        let max = match key {
+            "width" | "height" => MAX_SIZE,
+            "spp" => MAX_SPP,
+            "shadow_rays" => MAX_SHADOW_RAYS,
+            _ => MAX_RR_DEPTH,
+        };
         match v {
-            Some(v) if *v.get_ref() == 0 => cx.err(v.span(), format!("'{key}' must be at least 1")),
-            Some(v) => Ok(Some(*v.get_ref())),
+            Some(v) => match check(&format!("'{key}'"), *v.get_ref() as u64, 1, max) {
+                Ok(()) => Ok(Some(*v.get_ref())),
+                Err(m) => cx.err(v.span(), m),
+            },
             None => Ok(None),
         }
     };
@@ -805,21 +818,27 @@ fn settings(cx: &Ctx, r: &RenderT) -> Result<FileSettings, SceneError> {
     let max_depth = match &r.max_depth {
         None => None,
         Some(d) if *d.get_ref() == -1 => None,
-        Some(d) if *d.get_ref() >= 0 && *d.get_ref() <= u32::MAX as i64 => {
+        Some(d) if (0..=crate::limits::MAX_DEPTH as i64).contains(d.get_ref()) => {
             Some(*d.get_ref() as u32)
         }
         Some(d) => {
             return cx.err(
                 d.span(),
-                "'max_depth' must be -1 (unlimited) or a path length of 0 or more",
+                format!(
+                    "'max_depth' must be -1 (unlimited) or a path length of 0 to {}",
+                    crate::limits::MAX_DEPTH
+                ),
             )
         }
     };
     let rr_survival = match &r.rr_survival {
-        Some(p) if !(*p.get_ref() > 0.0 && *p.get_ref() < 1.0) => {
+        Some(p) if !(*p.get_ref() > 0.0 && *p.get_ref() <= crate::limits::MAX_RR_SURVIVAL) => {
             return cx.err(
                 p.span(),
-                "'rr_survival' must be a probability between 0 and 1 (exclusive)",
+                format!(
+                    "'rr_survival' must be a probability between 0 and 1 (exclusive), at most {}",
+                    crate::limits::MAX_RR_SURVIVAL
+                ),
             )
         }
         p => p.as_ref().map(|p| *p.get_ref()),

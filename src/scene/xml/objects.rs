@@ -6,6 +6,7 @@ use super::props::{ColorSrc, Ids, Props, Result};
 use crate::camera::{CameraDesc, FovAxis};
 use crate::geometry::mesh::TriangleMesh;
 use crate::integrator::IntegratorKind;
+use crate::limits;
 use crate::material::conductor::{conductor_ior, conductor_names};
 use crate::material::{
     Bsdf, Conductor, Dielectric, Lambert, Material, Mirror, Plastic, RoughConductor,
@@ -97,6 +98,10 @@ impl<'a> Builder<'a> {
             .join(name)
     }
 
+    fn bounded(&self, e: &Elem, what: &str, v: i64, min: u64, max: u64) -> Result<u32> {
+        bounded(self.doc, e, what, v, min, max)
+    }
+
     fn sensor(&mut self, e: &'a Elem, index: usize) -> Result<()> {
         let p = self.props(e)?;
         let kind = p.kind()?;
@@ -179,13 +184,7 @@ impl<'a> Builder<'a> {
             ));
         }
         let positive = |name: &'static str, v: i64| -> Result<u32> {
-            if (1..=1 << 20).contains(&v) {
-                Ok(v as u32)
-            } else {
-                Err(self
-                    .doc
-                    .err(e, format!("film {name} must be at least 1, got {v}")))
-            }
+            self.bounded(e, &format!("film {name}"), v, 1, limits::MAX_SIZE)
         };
         // Mitsuba's defaults.
         let w = positive("width", p.int("width", 768)?)?;
@@ -194,9 +193,13 @@ impl<'a> Builder<'a> {
         self.desc.settings.height = Some(h);
         let cx = p.int("crop_offset_x", 0)?;
         let cy = p.int("crop_offset_y", 0)?;
-        let cw = p.int("crop_width", w as i64 - cx)?;
-        let ch = p.int("crop_height", h as i64 - cy)?;
-        if cx < 0 || cy < 0 || cw < 1 || ch < 1 || cx + cw > w as i64 || cy + ch > h as i64 {
+        let cw = p.int("crop_width", (w as i64).saturating_sub(cx))?;
+        let ch = p.int("crop_height", (h as i64).saturating_sub(cy))?;
+        // Checked sums: huge offsets and sizes must not wrap around into a fit.
+        let fits = |o: i64, n: i64, size: u32| {
+            o >= 0 && n >= 1 && o.checked_add(n).is_some_and(|end| end <= size as i64)
+        };
+        if !(fits(cx, cw, w) && fits(cy, ch, h)) {
             return Err(self.doc.err(
                 e,
                 format!(
@@ -244,12 +247,8 @@ impl<'a> Builder<'a> {
         let p = self.props(e)?;
         p.kind()?; // any type: mcrt's own sampler is used
         let spp = p.int("sample_count", 4)?;
-        if !(1..=1 << 24).contains(&spp) {
-            return Err(self
-                .doc
-                .err(e, format!("sample_count must be at least 1, got {spp}")));
-        }
-        self.desc.settings.spp = Some(spp as u32);
+        let spp = self.bounded(e, "sample_count", spp, 1, limits::MAX_SPP)?;
+        self.desc.settings.spp = Some(spp);
         let seed = p.int("seed", 0)?;
         self.desc.settings.seed = Some(seed as u64);
         for name in ["jitter", "scramble_seed", "pixel_format", "dimension"] {
@@ -267,12 +266,14 @@ impl<'a> Builder<'a> {
             "path" | "volpath" => {
                 s.integrator = Some(IntegratorKind::Path);
                 let rr = p.int("rr_depth", 5)?;
-                if rr < 1 {
-                    return Err(self
-                        .doc
-                        .err(e, format!("rr_depth must be at least 1, got {rr}")));
-                }
-                s.rr_depth = Some(rr as u32);
+                s.rr_depth = Some(bounded(
+                    self.doc,
+                    e,
+                    "rr_depth",
+                    rr,
+                    1,
+                    limits::MAX_RR_DEPTH,
+                )?);
             }
             "direct" => {
                 s.integrator = Some(IntegratorKind::Direct);
@@ -280,10 +281,15 @@ impl<'a> Builder<'a> {
                 // mirrors and glass as mcrt's native `direct` does.
                 s.specular_chain = Some(false);
                 let n = p.int("emitter_samples", p.int("shadow_samples", 1)?)?;
-                if n < 1 {
-                    return Err(self.doc.err(e, "emitter_samples must be at least 1"));
-                }
-                s.shadow_rays = Some(n as u32);
+                let n = bounded(
+                    self.doc,
+                    e,
+                    "emitter_samples",
+                    n,
+                    1,
+                    limits::MAX_SHADOW_RAYS,
+                )?;
+                s.shadow_rays = Some(n);
                 if p.int("bsdf_samples", 1)? != 1 {
                     return Err(self
                         .doc
@@ -301,11 +307,15 @@ impl<'a> Builder<'a> {
         let d = p.int("max_depth", -1)?;
         s.max_depth = match d {
             -1 => None,
-            d if d >= 0 => Some(d as u32),
+            d if (0..=limits::MAX_DEPTH as i64).contains(&d) => Some(d as u32),
             d => {
-                return Err(self
-                    .doc
-                    .err(e, format!("max_depth must be -1 or ≥ 0, got {d}")))
+                return Err(self.doc.err(
+                    e,
+                    format!(
+                        "max_depth must be -1 or between 0 and {}, got {d}",
+                        limits::MAX_DEPTH
+                    ),
+                ))
             }
         };
         let hide = p.bool("hide_emitters", false)?;
@@ -920,4 +930,13 @@ const IORS: &[(&str, f32)] = &[
 fn named_ior(s: &str) -> Option<f32> {
     let s = s.trim().to_ascii_lowercase();
     IORS.iter().find(|(n, _)| *n == s).map(|i| i.1)
+}
+
+/// An integer property within [min, max] (crate::limits), as u32.
+fn bounded(doc: &Document, e: &Elem, what: &str, v: i64, min: u64, max: u64) -> Result<u32> {
+    if v < 0 {
+        return Err(doc.err(e, format!("{what} must be at least {min}, got {v}")));
+    }
+    crate::limits::check(what, v as u64, min, max).map_err(|m| doc.err(e, m))?;
+    Ok(v as u32)
 }
