@@ -64,6 +64,17 @@ impl Aov {
         }
     }
 
+    /// The layer's channels in the EXR (`LAYER.CHANNEL`), in order, as [`channels`] writes
+    /// them.
+    pub fn channels(&self) -> &'static [&'static str] {
+        match self {
+            Aov::Albedo | Aov::Variance => &["R", "G", "B"],
+            Aov::Normal => &["X", "Y", "Z"],
+            Aov::Depth => &["Z"],
+            Aov::Spp => &["Y"],
+        }
+    }
+
     /// Whether the layer needs the guide rays of [`render_guides`].
     pub fn needs_guides(&self) -> bool {
         matches!(self, Aov::Albedo | Aov::Normal | Aov::Depth)
@@ -204,4 +215,35 @@ pub fn channels(aovs: &[Aov], guides: Option<&Guides>, film: &Film) -> Vec<(Stri
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// [`Aov::channels`] names the channels [`channels`] writes, in order.
+    #[test]
+    fn channel_names_match_the_layers() {
+        let film = Film::new(2, 1);
+        let guides = Guides {
+            albedo: vec![Color::ZERO; 2],
+            normal: vec![Vec3A::ZERO; 2],
+            depth: vec![0.0; 2],
+        };
+        for aov in Aov::ALL {
+            let names: Vec<String> = channels(&[aov], Some(&guides), &film)
+                .into_iter()
+                .map(|(n, v)| {
+                    assert_eq!(v.len(), 2);
+                    n
+                })
+                .collect();
+            let want: Vec<String> = aov
+                .channels()
+                .iter()
+                .map(|c| format!("{}.{c}", aov.name()))
+                .collect();
+            assert_eq!(names, want);
+        }
+    }
 }

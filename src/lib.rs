@@ -27,6 +27,7 @@ pub mod progressive;
 pub mod render;
 pub mod sampler;
 pub mod scene;
+pub mod session;
 pub mod texture;
 
 use integrator::{IntegratorKind, IntegratorParams, RussianRoulette};

@@ -492,42 +492,16 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
         }),
         ..Default::default()
     };
-    // With --max-depth -1 the flag must also override a limit in the file.
-    let mut file_settings = desc.settings.clone();
-    if a.max_depth == Some(-1) {
-        file_settings.max_depth = None;
-    }
-    let mut settings = mcrt::resolve_settings(&file_settings, &over, a.threads)?;
-    settings.params.photon = a.photon.params()?;
-    settings.backend = a.backend.unwrap_or_default();
-    mcrt::check_memory(&settings).map_err(|e| match (a.width, a.height) {
-        // The size came from the scene file: say so.
-        (None, None) => Error::Scene(SceneError::new(&a.scene, None, e.to_string())),
-        _ => e,
-    })?;
-    // The camera must exist before anything is built or rendered.
-    let names: Vec<&str> = desc.cameras.iter().map(|(n, _)| n.as_str()).collect();
-    if names.is_empty() {
-        return Err(SceneError::new(
-            &a.scene,
-            None,
-            "the scene defines no camera (add a [[camera]] table, or a <sensor> in Mitsuba XML)",
-        )
-        .into());
-    }
-    if let Some(name) = &settings.camera {
-        if !names.contains(&name.as_str()) {
-            return Err(SceneError::new(
-                &a.scene,
-                None,
-                format!("no camera named '{name}' (defined: {})", names.join(", ")),
-            )
-            .into());
-        }
-    }
-    desc.check_limits()
-        .map_err(|e| SceneError::new(&a.scene, None, e))?;
-    let scene = Scene::build(desc);
+    let request = mcrt::session::Request {
+        over,
+        // With --max-depth -1 the flag must also override a limit in the file.
+        unlimited_depth: a.max_depth == Some(-1),
+        threads: a.threads,
+        photon: a.photon.params()?,
+        backend: a.backend.unwrap_or_default(),
+    };
+    let settings = mcrt::session::settings(&a.scene, &desc.settings, &desc.cameras, &request)?;
+    let scene = mcrt::session::build(&a.scene, desc)?;
     let load_time = t_load.elapsed();
 
     let (_, _, fw, fh) = settings.window();
@@ -550,17 +524,14 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
         );
     }
     // Budgets: with --time or --target-noise, only --spp bounds the samples.
-    let budget = mcrt::progressive::Budget {
-        spp: if (a.time.is_some() || a.target_noise.is_some()) && a.spp.is_none() {
-            None
-        } else {
-            Some(settings.spp)
-        },
-        time: a.time,
-        target_noise: a.target_noise,
-        adaptive: a.adaptive,
-        max_pass: a.write_partial,
-    };
+    let budget = mcrt::session::budget(
+        &settings,
+        a.spp.is_some(),
+        a.time,
+        a.target_noise,
+        a.adaptive,
+        a.write_partial,
+    )?;
     let (mut film, mut next) = match &a.resume {
         None => (Film::new(fw, fh), vec![0; npix as usize]),
         Some(path) => {
