@@ -380,7 +380,11 @@ pub fn write_atomic(
 
 fn write_png(path: &Path, img: &Image, opts: &WriteOptions) -> Result<(), String> {
     let file = std::fs::File::create(path).map_err(|e| e.to_string())?;
-    let w = std::io::BufWriter::new(file);
+    encode_png(std::io::BufWriter::new(file), img, opts)
+}
+
+/// Encodes the image as an 8-bit sRGB PNG (exposure and tone map applied) into `w`.
+pub fn encode_png(w: impl std::io::Write, img: &Image, opts: &WriteOptions) -> Result<(), String> {
     let mut enc = png::Encoder::new(w, img.width, img.height);
     enc.set_color(png::ColorType::Rgb);
     enc.set_depth(png::BitDepth::Eight);
@@ -393,7 +397,18 @@ fn write_png(path: &Path, img: &Image, opts: &WriteOptions) -> Result<(), String
 }
 
 fn write_exr(path: &Path, img: &Image, half: bool) -> Result<(), String> {
+    let file = std::fs::File::create(path).map_err(|e| e.to_string())?;
+    encode_exr(std::io::BufWriter::new(file), img, half)
+}
+
+/// Encodes the image as a linear RGB OpenEXR file into `w`.
+pub fn encode_exr(
+    w: impl std::io::Write + std::io::Seek,
+    img: &Image,
+    half: bool,
+) -> Result<(), String> {
     use exr::prelude::*;
+    let mut out = w;
     let (w, h) = (img.width as usize, img.height as usize);
     let get = |x: usize, y: usize| img.pixels[y * w + x];
     // RLE in 64² tiles (the crate's fast default), stored in increasing order: the tiles are
@@ -410,7 +425,7 @@ fn write_exr(path: &Path, img: &Image, half: bool) -> Result<(), String> {
         });
         Image::from_encoded_channels((w, h), encoding, channels)
             .write()
-            .to_file(path)
+            .to_buffered(&mut out)
     } else {
         let channels = SpecificChannels::rgb(|Vec2(x, y)| {
             let p = get(x, y);
@@ -418,9 +433,10 @@ fn write_exr(path: &Path, img: &Image, half: bool) -> Result<(), String> {
         });
         Image::from_encoded_channels((w, h), encoding, channels)
             .write()
-            .to_file(path)
+            .to_buffered(&mut out)
     };
-    r.map_err(|e| e.to_string())
+    r.map_err(|e| e.to_string())?;
+    out.flush().map_err(|e| e.to_string())
 }
 
 /// Reads the first RGB(A) layer of an OpenEXR file as linear RGB: the file is read once

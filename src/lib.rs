@@ -13,6 +13,7 @@ pub mod aov;
 pub mod camera;
 pub mod checkpoint;
 pub mod compare;
+pub mod denoise;
 pub mod film;
 pub mod geometry;
 pub mod image;
@@ -23,6 +24,7 @@ pub mod limits;
 pub mod material;
 pub mod parts;
 pub mod photon;
+pub mod preview;
 pub mod progressive;
 pub mod render;
 pub mod sampler;
@@ -56,6 +58,9 @@ pub enum Error {
     /// An input file (not a scene) that cannot be used.
     #[error("{0}")]
     Input(String),
+    /// Open Image Denoise failed on an image.
+    #[error("{0}")]
+    Denoise(String),
 }
 
 impl Error {

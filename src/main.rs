@@ -44,6 +44,9 @@ enum Command {
     /// Trace the photon maps of the `photon` integrator and draw the stored photons over a
     /// dimmed direct-light render: global photons blue, caustic photons orange.
     Photons(PhotonsArgs),
+    /// Denoise an EXR rendered with `--aov albedo,normal` with Intel Open Image Denoise (its
+    /// RT filter, guided by the albedo and normal layers; see README, "Denoising").
+    Denoise(DenoiseArgs),
 }
 
 /// Settings of the photon-mapping integrators.
@@ -268,6 +271,14 @@ struct RenderArgs {
     /// No progress bar and no summary line.
     #[arg(short, long)]
     quiet: bool,
+    /// Serve a live preview of the render at ADDR (default 127.0.0.1:0, a free port on
+    /// loopback; the URL is printed): the image after each pass, with a stop button.
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:0", conflicts_with = "pass")]
+    preview: Option<String>,
+    /// Denoise the image (and each --write-partial image) with Intel Open Image Denoise,
+    /// guided by albedo and normal; the raw image goes to OUTPUT's stem + .raw + extension.
+    #[arg(long, conflicts_with = "pass")]
+    denoise: bool,
     #[command(flatten)]
     photon: PhotonArgs,
 }
@@ -365,6 +376,7 @@ fn main() {
         Command::Merge(args) => merge(args).map(|_| 0),
         Command::Compare(args) => compare(args).map(|_| 0),
         Command::Photons(args) => photons(args).map(|_| 0),
+        Command::Denoise(args) => denoise(args).map(|_| 0),
     };
     match result {
         Ok(0) => {}
@@ -461,6 +473,8 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
     if let Some(r) = &a.resume {
         distinct_files(&[("-o", &output), ("--resume", r)])?;
     }
+    let denoiser = load_denoiser(&a, &output)?;
+    let preview = start_preview(&a)?;
     let t_load = Instant::now();
     let load = mcrt::LoadOptions {
         defines: parse_defines(&a.define)?,
@@ -530,7 +544,11 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
         a.time,
         a.target_noise,
         a.adaptive,
-        a.write_partial,
+        match (&preview, a.write_partial) {
+            (Some(_), Some(w)) => Some(w.min(mcrt::preview::MAX_PASS)),
+            (Some(_), None) => Some(mcrt::preview::MAX_PASS),
+            (None, w) => w,
+        },
     )?;
     let (mut film, mut next) = match &a.resume {
         None => (Film::new(fw, fh), vec![0; npix as usize]),
@@ -581,7 +599,7 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
         b
     };
     let opts = a.image.options();
-    let guides = if aovs.iter().any(|v| v.needs_guides()) {
+    let guides = if aovs.iter().any(|v| v.needs_guides()) || denoiser.is_some() {
         Some(mcrt::aov::render_guides(&scene, &settings)?)
     } else {
         None
@@ -600,11 +618,19 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
     };
     let write_output = |film: &Film| -> Result<(), Error> {
         let layers = mcrt::aov::channels(&aovs, guides.as_ref(), film);
-        write_image_with(&output, &film.image(), &opts, &layers)?;
+        match &denoiser {
+            None => write_image_with(&output, &film.image(), &opts, &layers)?,
+            Some((oidn, raw)) => {
+                write_denoised(oidn, raw, &output, film, guides.as_ref(), &opts, &layers)?
+            }
+        }
         Ok(())
     };
     let mut last_partial = Instant::now();
     let mut after_pass = |film: &Film, next: &[u32]| -> Result<(), Error> {
+        if let Some(p) = &preview {
+            p.publish(film, next, budget.spp);
+        }
         if let Some(every) = a.write_partial {
             if last_partial.elapsed() >= every && !CANCEL.load(Ordering::SeqCst) {
                 write_output(film)?;
@@ -627,6 +653,9 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
         &|n| bar.inc(n),
     )?;
     bar.finish_and_clear();
+    if let Some(p) = &preview {
+        p.set_state(mcrt::preview::State::Done);
+    }
     let interrupted = outcome.stop == Stop::Interrupted;
     write_output(&film)?;
     if interrupted || a.checkpoint.is_some() {
@@ -876,11 +905,13 @@ fn render_sppm(
         || a.resume.is_some()
         || a.write_partial.is_some()
         || a.aov.is_some()
+        || a.preview.is_some()
+        || a.denoise
     {
         return Err(Error::Usage(
             "--integrator sppm renders the whole image at once: --pass, --time, \
-             --target-noise, --resume, --write-partial and --aov apply to path, direct and \
-             photon"
+             --target-noise, --resume, --write-partial, --aov, --preview and --denoise apply \
+             to path, direct and photon"
                 .into(),
         ));
     }
@@ -987,5 +1018,73 @@ fn photons(a: PhotonsArgs) -> Result<(), Error> {
         maps.memory_bytes() as f64 / 1e6,
         maps.build_time.as_secs_f64()
     );
+    Ok(())
+}
+
+/// `--denoise`: OIDN, loaded now so that a missing library stops the command before any
+/// rendering, and the path of the raw image (checked now too).
+fn load_denoiser(
+    a: &RenderArgs,
+    output: &std::path::Path,
+) -> Result<Option<(mcrt::denoise::Oidn, PathBuf)>, Error> {
+    if !a.denoise {
+        return Ok(None);
+    }
+    let raw = mcrt::denoise::raw_path(output);
+    check_output_path(&raw)?;
+    let oidn = mcrt::denoise::Oidn::load().map_err(Error::Usage)?;
+    Ok(Some((oidn, raw)))
+}
+
+/// Writes the raw image to `raw` and the denoised one to `output`, both with `layers`.
+fn write_denoised(
+    oidn: &mcrt::denoise::Oidn,
+    raw: &std::path::Path,
+    output: &std::path::Path,
+    film: &Film,
+    guides: Option<&mcrt::aov::Guides>,
+    opts: &WriteOptions,
+    layers: &[(String, Vec<f32>)],
+) -> Result<(), Error> {
+    let image = film.image();
+    let guides = guides.expect("--denoise renders the guides");
+    let clean = oidn
+        .denoise_guided(&image, guides)
+        .map_err(Error::Denoise)?;
+    write_image_with(raw, &image, opts, layers)?;
+    write_image_with(output, &clean, opts, layers)?;
+    Ok(())
+}
+
+/// `--preview`: starts the server and prints its URL.
+fn start_preview(a: &RenderArgs) -> Result<Option<mcrt::preview::Preview>, Error> {
+    let Some(addr) = &a.preview else {
+        return Ok(None);
+    };
+    let p = mcrt::preview::Preview::start(addr, &CANCEL).map_err(Error::Usage)?;
+    eprintln!("preview: {}", p.url());
+    Ok(Some(p))
+}
+
+#[derive(clap::Args)]
+struct DenoiseArgs {
+    /// An EXR with channels R, G, B, albedo.R/G/B and normal.X/Y/Z (`mcrt render --aov
+    /// albedo,normal -o IN.exr`).
+    input: PathBuf,
+    /// The denoised image (.png or .exr).
+    #[arg(short, long)]
+    output: PathBuf,
+    #[command(flatten)]
+    image: ImageArgs,
+}
+
+fn denoise(a: DenoiseArgs) -> Result<(), Error> {
+    check_output_path(&a.output)?;
+    let input = mcrt::denoise::read_guided_exr(&a.input).map_err(Error::Input)?;
+    let oidn = mcrt::denoise::Oidn::load().map_err(Error::Usage)?;
+    let clean = oidn
+        .denoise(&input.color, &input.albedo, &input.normal)
+        .map_err(Error::Denoise)?;
+    write_image(&a.output, &clean, &a.image.options())?;
     Ok(())
 }
