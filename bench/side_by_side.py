@@ -23,6 +23,7 @@ and render it with the same resolution, samples per pixel, path length and threa
    render's. The ratio takes mcrt's faster sampler.
 
 usage: .venv/bin/python bench/side_by_side.py [--quick] [--threads N] [--scenes a,b,...]
+       .venv/bin/python bench/side_by_side.py --validate SPP   (image means of both, no timing)
 Needs: pip install mitsuba numpy; Debian's libllvm19 for Mitsuba's LLVM variant; cargo (the
 script runs `cargo build --release` unless --no-build). The generated scenes are made by
 bench/make_scenes.py when missing.
