@@ -19,8 +19,9 @@ and render it with the same resolution, samples per pixel, path length and threa
    RMSE sets the target RMSE and Mitsuba's time. mcrt, with `independent` and with `sobol`,
    renders the base spp too; with each sampler whose time projected to the target (RMSE ∝
    1/√spp) is within a third of the best projection, it searches the fewest spp that reach
-   that RMSE (a first guess from the projection, then steps of an eighth); its time is that
-   render's. The ratio takes mcrt's faster sampler.
+   that RMSE (a first guess from the projection, steps of an eighth, then bisection to a
+   32nd; at most 32 times the base spp); its time is that render's. The ratio takes mcrt's
+   faster sampler.
 
 usage: .venv/bin/python bench/side_by_side.py [--quick] [--threads N] [--scenes a,b,...]
        .venv/bin/python bench/side_by_side.py --validate SPP   (image means of both, no timing)
@@ -201,29 +202,44 @@ def reference(name, src, ref_spp, variant):
     return read_exr(path)[:, :, :3]
 
 
-def mcrt_equal_error(name, src, sampler, target, base_spp, base_err, threads):
-    """The fewest spp (to within an eighth) at which mcrt's RMSE reaches TARGET: a first guess
-    from its error at the base spp (RMSE ∝ 1/√spp), then steps of an eighth up or down.
-    Returns (spp, render seconds, RMSE) of the render that reached it, or None."""
+def mcrt_equal_error(name, src, sampler, target, base, threads):
+    """The fewest spp (to within a 32nd; at most 32 times the base spp) at which mcrt's RMSE
+    reaches TARGET: a first guess from its error at the base spp (RMSE ∝ 1/√spp), steps of an
+    eighth up or down, then bisection. BASE is the base render's (spp, seconds, RMSE), taken
+    as the first guess where the guess lies within a sixteenth of it. Returns (spp, seconds,
+    RMSE) of the render that reached it, or None."""
     def at(spp):
         secs, _, img = mcrt_render(scene_xml(f"{name}-mcrt-{sampler}", src, ERR_RES, spp, sampler),
                                    sampler, SEED_ERR, threads)
         return spp, secs, rmse(img, REF[name])
 
-    spp = max(4, int(round(base_spp * (base_err / target) ** 2)))
-    found, tried = None, at(spp)
+    cap = 32 * base[0]
+    spp = min(max(4, int(round(base[0] * (base[2] / target) ** 2))), cap)
+    if abs(spp - base[0]) <= base[0] / 16:
+        spp = base[0]
+    found, failed, tried = None, None, base if spp == base[0] else at(spp)
     going_up = tried[2] > target
-    for _ in range(16):
+    for _ in range(24):
         if tried[2] <= target:
             found = tried
             if going_up:
                 break
-        elif not going_up:
+        else:
+            failed = tried[0]
+            if not going_up:
+                break
+        nxt = min(max(1, int(round(spp * (9 / 8 if going_up else 7 / 8)))), cap)
+        if nxt == spp:
             break
-        spp = max(1, int(round(spp * (9 / 8 if going_up else 7 / 8))))
-        if spp > 32 * base_spp or (not going_up and spp == tried[0]):
-            break
+        spp = nxt
         tried = at(spp)
+    # Bisect between the last spp that failed and the first that reached, to a 32nd.
+    while found and failed and found[0] - failed > max(1, found[0] // 32):
+        tried = at((found[0] + failed) // 2)
+        if tried[2] <= target:
+            found = tried
+        else:
+            failed = tried[0]
     return found
 
 
@@ -347,7 +363,8 @@ def main():
         for s, e in err["mcrt"].items():
             found = None
             if e["projected s"] <= 1.33 * fastest:
-                found = mcrt_equal_error(name, src, s, target, base_spp, e["base rmse"], a.threads)
+                found = mcrt_equal_error(name, src, s, target,
+                                         (base_spp, e["base s"], e["base rmse"]), a.threads)
             if found:
                 e["equal error"] = {"spp": found[0], "s": found[1], "rmse": found[2]}
             print(f"  mcrt {s}: RMSE {e['base rmse']:.5f} at {base_spp} spp in "
