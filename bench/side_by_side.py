@@ -165,8 +165,9 @@ def mitsuba_render(variant, xml, seed):
         return img
 
     render(4, seed + 7919)  # warm-up, evaluated (4: square and a power of two, as ldsampler wants)
-    # The 4-spp warm-up does not always compile every kernel of the full render
-    # (seen for wavefronts of 2^24 lanes); then the full render was the warm-up.
+    # Mitsuba's kernels depend on the sample count: for `independent` only on whether it is a
+    # power of two (a 4-spp warm-up serves 64 and 256), for `multijitter` and `ldsampler` on
+    # the count itself. Where the warm-up missed a kernel, the full render was the warm-up.
     for attempt in range(3):
         jit_compiles()
         t = time.perf_counter()
