@@ -184,13 +184,19 @@ def mitsuba_render(variant, xml, seed):
 def reference(name, src, ref_spp, variant):
     """The cached Mitsuba reference of a generated scene at ERR_RES², or renders it (in passes
     of 256 spp, so that the LLVM variant's wavefront stays small)."""
-    key = hashlib.sha1(open(src, "rb").read()).hexdigest()[:10]
-    path = os.path.join(OUT, "refs", f"{name}-{ERR_RES}-{ref_spp}-{key}.exr")
+    step = min(256, ref_spp)
+    xml = scene_xml(name + "-ref", src, ERR_RES, step, "independent")
+    # The cache key: the scene and every file it names (meshes, textures, includes).
+    h = hashlib.sha1(open(xml, "rb").read())
+    for el in ET.parse(xml).getroot().iter():
+        f = el.get("filename") if el.tag == "include" else (
+            el.get("value") if el.tag == "string" and el.get("name") == "filename" else None)
+        if f and os.path.isfile(f):
+            h.update(open(f, "rb").read())
+    path = os.path.join(OUT, "refs", f"{name}-{ERR_RES}-{ref_spp}-{h.hexdigest()[:10]}.exr")
     if os.path.exists(path):
         return read_exr(path)
     print(f"  rendering the reference ({ref_spp} spp with {variant}; cached in {path})", flush=True)
-    step = min(256, ref_spp)
-    xml = scene_xml(name + "-ref", src, ERR_RES, step, "independent")
     mi.set_variant(variant)
     scene = mi.load_file(xml)
     acc, done = 0.0, 0
@@ -303,8 +309,9 @@ def main():
     ref_spp = a.ref_spp or (1024 if a.quick else 4096)
     if not a.no_build:
         subprocess.run(["cargo", "build", "--release", "--quiet"], cwd=ROOT, check=True)
-    if any(SCENES[n][1] is None and not os.path.exists(SCENES[n][0]) for n in names):
-        subprocess.run([sys.executable, os.path.join(ROOT, "bench", "make_scenes.py")], check=True)
+    if any(SCENES[n][1] is None for n in names):  # deterministic, so rewriting is harmless
+        subprocess.run([sys.executable, os.path.join(ROOT, "bench", "make_scenes.py")],
+                       check=True, stdout=subprocess.DEVNULL)
     mi.set_variant("scalar_rgb")
     dr.set_thread_count(a.threads)
     dr.set_flag(dr.JitFlag.KernelHistory, True)
