@@ -283,7 +283,7 @@ def main():
     ap.add_argument("--terrain", type=int, default=640, help="terrain vertices per side")
     a = ap.parse_args()
     if not 2 <= a.terrain <= 4096:  # 4096² vertices: 33.5 M triangles, 0.8 GB of PLY
-        raise SystemExit("--terrain must be between 2 and 4096")
+        ap.error("--terrain must be between 2 and 4096")
     os.makedirs(a.out, exist_ok=True)
     bunny_rel = os.path.relpath(BUNNY, a.out)
     tris = write_terrain_ply(os.path.join(a.out, "terrain.ply"), a.terrain)

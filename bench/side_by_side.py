@@ -302,9 +302,13 @@ def main():
     names = [n for n in a.scenes.split(",") if n]
     for n in names:
         if n not in SCENES:
-            sys.exit(f"unknown scene {n!r}; known: {', '.join(SCENES)}")
+            ap.error(f"unknown scene {n!r}; known: {', '.join(SCENES)}")
     if a.threads < 1:
-        sys.exit("--threads must be at least 1")
+        ap.error("--threads must be at least 1")
+    for opt, v, hi in (("--ref-spp", a.ref_spp, 65536), ("--validate", a.validate, 65536),
+                       ("--validate-res", a.validate_res, 4096)):
+        if v is not None and not 1 <= v <= hi:
+            ap.error(f"{opt} must be between 1 and {hi}")
     spp_rate, base_spp = (16, 64) if a.quick else (64, 256)
     ref_spp = a.ref_spp or (1024 if a.quick else 4096)
     if not a.no_build:
