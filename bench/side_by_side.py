@@ -19,10 +19,12 @@ and render it with the same resolution, samples per pixel, path length and threa
    RMSE sets the target RMSE and Mitsuba's time. mcrt, with `independent` and with `sobol`,
    renders the base spp too; with each sampler whose time projected to the target (RMSE ∝
    1/√spp) is within a third of the best projection, it searches the fewest spp that reach
-   that RMSE (a first guess from the projection, then steps of an eighth); its time is that
-   render's. The ratio takes mcrt's faster sampler.
+   that RMSE (a first guess from the projection, steps of an eighth, then bisection to a
+   32nd; at most 32 times the base spp); its time is that render's. The ratio takes mcrt's
+   faster sampler.
 
 usage: .venv/bin/python bench/side_by_side.py [--quick] [--threads N] [--scenes a,b,...]
+       .venv/bin/python bench/side_by_side.py --validate SPP   (image means of both, no timing)
 Needs: pip install mitsuba numpy; Debian's libllvm19 for Mitsuba's LLVM variant; cargo (the
 script runs `cargo build --release` unless --no-build). The generated scenes are made by
 bench/make_scenes.py when missing.
@@ -84,17 +86,25 @@ def scene_xml(name, src, res, spp, sampler):
             v = el.get(key)
             if v and "$" not in v and not os.path.isabs(v):
                 el.set(key, os.path.normpath(os.path.join(base, v)))
+    if tree.getroot().find("integrator") is None:  # mcrt's default; Mitsuba needs one named
+        ET.SubElement(tree.getroot(), "integrator", type="path")
     sensors = tree.getroot().findall("sensor")
     if len(sensors) != 1:
         sys.exit(f"{src}: the benchmark needs exactly one sensor at the top level")
-    film, smp = sensors[0].find("film"), sensors[0].find("sampler")
-    for el in film.findall("integer"):
-        if el.get("name") in ("width", "height"):
-            el.set("value", str(res))
+    # Mitsuba's defaults where the file has no film or sampler: hdrfilm and independent.
+    film = sensors[0].find("film")
+    if film is None:
+        film = ET.SubElement(sensors[0], "film", type="hdrfilm")
+    smp = sensors[0].find("sampler")
+    if smp is None:
+        smp = ET.SubElement(sensors[0], "sampler")
     smp.set("type", sampler)
-    for el in smp.findall("integer"):
-        if el.get("name") == "sample_count":
-            el.set("value", str(spp))
+    for parent, prop, value in ((film, "width", res), (film, "height", res),
+                                (smp, "sample_count", spp)):
+        el = parent.find(f"integer[@name='{prop}']")
+        if el is None:
+            el = ET.SubElement(parent, "integer", name=prop)
+        el.set("value", str(value))
     os.makedirs(os.path.join(OUT, "run"), exist_ok=True)
     out = os.path.join(OUT, "run", f"{name}.xml")
     tree.write(out, encoding="utf-8", xml_declaration=True)
@@ -126,7 +136,8 @@ def mcrt_render(xml, sampler, seed, threads):
     asked.append(sensor.find("sampler/integer[@name='sample_count']").get("value"))
     if list(m.group(1, 2, 3)) != asked or (int(m.group(2)), int(m.group(1))) != img.shape[:2]:
         sys.exit(f"mcrt rendered {m.group(0)}, not what {xml} asks")
-    return float(m.group(5)), float(m.group(4)), img
+    # mcrt prints hundredths of a second: the renders timed here take a second or more.
+    return max(float(m.group(5)), 0.005), float(m.group(4)), img
 
 
 def jit_compiles():
@@ -154,7 +165,10 @@ def mitsuba_render(variant, xml, seed):
         return img
 
     render(4, seed + 7919)  # warm-up, evaluated (4: square and a power of two, as ldsampler wants)
-    for _ in range(2):
+    # Mitsuba's kernels depend on the sample count: for `independent` only on whether it is a
+    # power of two (a 4-spp warm-up serves 64 and 256), for `multijitter` and `ldsampler` on
+    # the count itself. Where the warm-up missed a kernel, the full render was the warm-up.
+    for attempt in range(3):
         jit_compiles()
         t = time.perf_counter()
         img = render(spp, seed)
@@ -163,20 +177,26 @@ def mitsuba_render(variant, xml, seed):
         if not variant.startswith("llvm") or n == 0:
             break
         print(f"  ({variant} compiled {n} kernel(s) in {ms:.0f} ms during the timed render, "
-              f"{secs:.2f} s; timing it again)", flush=True)
+              f"{secs:.2f} s; " + ("timing it again)" if attempt < 2 else "kept)"), flush=True)
     return secs, load, img[:, :, :3]
 
 
 def reference(name, src, ref_spp, variant):
     """The cached Mitsuba reference of a generated scene at ERR_RES², or renders it (in passes
     of 256 spp, so that the LLVM variant's wavefront stays small)."""
-    key = hashlib.sha1(open(src, "rb").read()).hexdigest()[:10]
-    path = os.path.join(OUT, "refs", f"{name}-{ERR_RES}-{ref_spp}-{key}.exr")
+    step = min(256, ref_spp)
+    xml = scene_xml(name + "-ref", src, ERR_RES, step, "independent")
+    # The cache key: the scene and every file it names (meshes, textures, includes).
+    h = hashlib.sha1(open(xml, "rb").read())
+    for el in ET.parse(xml).getroot().iter():
+        f = el.get("filename") if el.tag == "include" else (
+            el.get("value") if el.tag == "string" and el.get("name") == "filename" else None)
+        if f and os.path.isfile(f):
+            h.update(open(f, "rb").read())
+    path = os.path.join(OUT, "refs", f"{name}-{ERR_RES}-{ref_spp}-{h.hexdigest()[:10]}.exr")
     if os.path.exists(path):
         return read_exr(path)
     print(f"  rendering the reference ({ref_spp} spp with {variant}; cached in {path})", flush=True)
-    step = min(256, ref_spp)
-    xml = scene_xml(name + "-ref", src, ERR_RES, step, "independent")
     mi.set_variant(variant)
     scene = mi.load_file(xml)
     acc, done = 0.0, 0
@@ -189,29 +209,44 @@ def reference(name, src, ref_spp, variant):
     return read_exr(path)[:, :, :3]
 
 
-def mcrt_equal_error(name, src, sampler, target, base_spp, base_err, threads):
-    """The fewest spp (to within an eighth) at which mcrt's RMSE reaches TARGET: a first guess
-    from its error at the base spp (RMSE ∝ 1/√spp), then steps of an eighth up or down.
-    Returns (spp, render seconds, RMSE) of the render that reached it, or None."""
+def mcrt_equal_error(name, src, sampler, target, base, threads):
+    """The fewest spp (to within a 32nd; at most 32 times the base spp) at which mcrt's RMSE
+    reaches TARGET: a first guess from its error at the base spp (RMSE ∝ 1/√spp), steps of an
+    eighth up or down, then bisection. BASE is the base render's (spp, seconds, RMSE), taken
+    as the first guess where the guess lies within a sixteenth of it. Returns (spp, seconds,
+    RMSE) of the render that reached it, or None."""
     def at(spp):
         secs, _, img = mcrt_render(scene_xml(f"{name}-mcrt-{sampler}", src, ERR_RES, spp, sampler),
                                    sampler, SEED_ERR, threads)
         return spp, secs, rmse(img, REF[name])
 
-    spp = max(4, int(round(base_spp * (base_err / target) ** 2)))
-    found, tried = None, at(spp)
+    cap = 32 * base[0]
+    spp = min(max(4, int(round(base[0] * (base[2] / target) ** 2))), cap)
+    if abs(spp - base[0]) <= base[0] / 16:
+        spp = base[0]
+    found, failed, tried = None, None, base if spp == base[0] else at(spp)
     going_up = tried[2] > target
-    for _ in range(16):
+    for _ in range(24):
         if tried[2] <= target:
             found = tried
             if going_up:
                 break
-        elif not going_up:
+        else:
+            failed = tried[0]
+            if not going_up:
+                break
+        nxt = min(max(1, int(round(spp * (9 / 8 if going_up else 7 / 8)))), cap)
+        if nxt == spp:
             break
-        spp = max(1, int(round(spp * (9 / 8 if going_up else 7 / 8))))
-        if spp > 32 * base_spp or (not going_up and spp == tried[0]):
-            break
+        spp = nxt
         tried = at(spp)
+    # Bisect between the last spp that failed and the first that reached, to a 32nd.
+    while found and failed and found[0] - failed > max(1, found[0] // 32):
+        tried = at((found[0] + failed) // 2)
+        if tried[2] <= target:
+            found = tried
+        else:
+            failed = tried[0]
     return found
 
 
@@ -267,15 +302,20 @@ def main():
     names = [n for n in a.scenes.split(",") if n]
     for n in names:
         if n not in SCENES:
-            sys.exit(f"unknown scene {n!r}; known: {', '.join(SCENES)}")
+            ap.error(f"unknown scene {n!r}; known: {', '.join(SCENES)}")
     if a.threads < 1:
-        sys.exit("--threads must be at least 1")
+        ap.error("--threads must be at least 1")
+    for opt, v, hi in (("--ref-spp", a.ref_spp, 65536), ("--validate", a.validate, 65536),
+                       ("--validate-res", a.validate_res, 4096)):
+        if v is not None and not 1 <= v <= hi:
+            ap.error(f"{opt} must be between 1 and {hi}")
     spp_rate, base_spp = (16, 64) if a.quick else (64, 256)
     ref_spp = a.ref_spp or (1024 if a.quick else 4096)
     if not a.no_build:
         subprocess.run(["cargo", "build", "--release", "--quiet"], cwd=ROOT, check=True)
-    if any(SCENES[n][1] is None and not os.path.exists(SCENES[n][0]) for n in names):
-        subprocess.run([sys.executable, os.path.join(ROOT, "bench", "make_scenes.py")], check=True)
+    if any(SCENES[n][1] is None for n in names):  # deterministic, so rewriting is harmless
+        subprocess.run([sys.executable, os.path.join(ROOT, "bench", "make_scenes.py")],
+                       check=True, stdout=subprocess.DEVNULL)
     mi.set_variant("scalar_rgb")
     dr.set_thread_count(a.threads)
     dr.set_flag(dr.JitFlag.KernelHistory, True)
@@ -335,7 +375,8 @@ def main():
         for s, e in err["mcrt"].items():
             found = None
             if e["projected s"] <= 1.33 * fastest:
-                found = mcrt_equal_error(name, src, s, target, base_spp, e["base rmse"], a.threads)
+                found = mcrt_equal_error(name, src, s, target,
+                                         (base_spp, e["base s"], e["base rmse"]), a.threads)
             if found:
                 e["equal error"] = {"spp": found[0], "s": found[1], "rmse": found[2]}
             print(f"  mcrt {s}: RMSE {e['base rmse']:.5f} at {base_spp} spp in "
