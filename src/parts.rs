@@ -294,19 +294,70 @@ pub fn write_part_with(
 }
 
 /// The names of a sums file's integer channels, in the order their checksum takes them:
-/// the sums' words, `count`, then `extra`.
-fn integer_channels(extra: &[&str]) -> Vec<String> {
+/// the sums' words, `count`, the splats' words if the film has splats, then `extra`.
+fn integer_channels(extra: &[&str], splats: bool) -> Vec<String> {
     let mut names = Vec::with_capacity(QUANTITIES.len() * CHANNELS.len() * 4 + 1 + extra.len());
-    for qname in QUANTITIES {
+    let words = |names: &mut Vec<String>, qname: &str| {
         for cname in CHANNELS {
             for word in 0..4 {
                 names.push(format!("{qname}.{cname}.w{word}"));
             }
         }
+    };
+    for qname in QUANTITIES {
+        words(&mut names, qname);
     }
     names.push("count".into());
+    if splats {
+        words(&mut names, SPLAT);
+    }
     names.extend(extra.iter().map(|s| s.to_string()));
     names
+}
+
+/// The channels' name prefix of a film's splats ([`Film::splat`]); their path count is the
+/// metadata's `splat_paths`, which the checksum covers too.
+const SPLAT: &str = "splat";
+
+/// An i128 per pixel and channel as four u32 words per channel (least significant first).
+fn push_words(ints: &mut Vec<Vec<u32>>, data: &[[i128; 3]]) {
+    for c in 0..CHANNELS.len() {
+        for word in 0..4 {
+            ints.push(
+                data.iter()
+                    .map(|p| ((p[c] as u128) >> (32 * word)) as u32)
+                    .collect(),
+            );
+        }
+    }
+}
+
+/// [`push_words`] read back.
+fn read_words<'a>(
+    words: &mut impl Iterator<Item = &'a &'a [u32]>,
+    data: &mut [[i128; 3]],
+) -> Result<(), String> {
+    for c in 0..CHANNELS.len() {
+        for word in 0..4 {
+            let v = words.next().ok_or("missing sums channel")?;
+            for (p, &x) in data.iter_mut().zip(v.iter()) {
+                p[c] = (p[c] as u128 | (x as u128) << (32 * word)) as i128;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The checksum of the channels and of the splats' path count.
+fn checksum_of(names: &[String], ints: &[&[u32]], splat_paths: u64) -> u64 {
+    let paths = [splat_paths as u32, (splat_paths >> 32) as u32];
+    checksum(
+        names
+            .iter()
+            .map(|n| n.as_str())
+            .zip(ints.iter().copied())
+            .chain((splat_paths > 0).then_some(("splat_paths", &paths[..]))),
+    )
 }
 
 /// The checksum a sums file carries (`checksum=` in its metadata) of its integer channels in
@@ -341,18 +392,13 @@ fn write_part_exr(path: &Path, part: &Part, extra: &[(&str, &[u32])]) -> Result<
         channels.push(AnyChannel::new(*name, FlatSamples::F32(v)));
     }
     let mut ints: Vec<Vec<u32>> = Vec::new();
-    for data in [&f.sum, &f.sum_sq] {
-        for c in 0..CHANNELS.len() {
-            for word in 0..4 {
-                ints.push(
-                    data.iter()
-                        .map(|p| ((p[c] as u128) >> (32 * word)) as u32)
-                        .collect(),
-                );
-            }
-        }
-    }
+    push_words(&mut ints, &f.sum);
+    push_words(&mut ints, &f.sum_sq);
     ints.push(f.count.clone());
+    let splats = !f.splat.is_empty();
+    if splats {
+        push_words(&mut ints, &f.splat);
+    }
     for (name, v) in extra {
         if v.len() != w * h {
             return Err(format!("channel '{name}' does not have the film's size"));
@@ -360,18 +406,18 @@ fn write_part_exr(path: &Path, part: &Part, extra: &[(&str, &[u32])]) -> Result<
         ints.push(v.to_vec());
     }
     let extra_names: Vec<&str> = extra.iter().map(|(n, _)| *n).collect();
-    let names = integer_channels(&extra_names);
-    let sum = checksum(
-        names
-            .iter()
-            .map(|n| n.as_str())
-            .zip(ints.iter().map(|v| &v[..])),
-    );
+    let names = integer_channels(&extra_names, splats);
+    let refs: Vec<&[u32]> = ints.iter().map(|v| &v[..]).collect();
+    let sum = checksum_of(&names, &refs, f.splat_paths);
     for (name, v) in names.iter().zip(ints) {
         channels.push(AnyChannel::new(name.as_str(), FlatSamples::U32(v)));
     }
     let mut attrs = LayerAttributes::named(LAYER);
-    let text = format!("{}checksum={sum:016x}\n", part.meta.to_text());
+    let paths = match f.splat_paths {
+        0 => String::new(),
+        n => format!("splat_paths={n}\n"),
+    };
+    let text = format!("{}{paths}checksum={sum:016x}\n", part.meta.to_text());
     attrs.other.insert(
         Text::from(ATTRIBUTE),
         AttributeValue::Text(Text::from_slice_unchecked(text.as_bytes())),
@@ -410,7 +456,8 @@ pub fn read_part(path: &Path) -> std::result::Result<Part, PartsError> {
 
 /// Bytes a pixel of a sums file takes in memory once read: its film and its channels' copy.
 fn part_bytes_per_pixel(extra: usize) -> u64 {
-    let film = 2 * std::mem::size_of::<[i128; 3]>() + std::mem::size_of::<u32>();
+    // Sums, sums of squares and splats (which a film may have).
+    let film = 3 * std::mem::size_of::<[i128; 3]>() + std::mem::size_of::<u32>();
     (film + 4 * extra) as u64
 }
 
@@ -477,7 +524,14 @@ pub fn decode_part(
             _ => Err(format!("channel '{name}' is not u32")),
         }
     };
-    let names = integer_channels(extra);
+    let splats = channel(&format!("{SPLAT}.R.w0")).is_ok();
+    let splat_paths: u64 = match text.lines().find_map(|l| l.strip_prefix("splat_paths=")) {
+        Some(n) => n
+            .parse()
+            .map_err(|_| format!("bad splat_paths '{}'", crate::input::shorten(n)))?,
+        None => 0,
+    };
+    let names = integer_channels(extra, splats);
     let ints = names
         .iter()
         .map(|n| channel(n))
@@ -486,7 +540,7 @@ pub fn decode_part(
         .lines()
         .find_map(|l| l.strip_prefix("checksum="))
         .ok_or("the metadata lacks 'checksum'")?;
-    let sum = checksum(names.iter().map(|n| n.as_str()).zip(ints.iter().copied()));
+    let sum = checksum_of(&names, &ints, splat_paths);
     if u64::from_str_radix(stated, 16).ok() != Some(sum) {
         return Err(format!(
             "its channels do not match their checksum ({} in the metadata, {sum:016x} \
@@ -496,18 +550,15 @@ pub fn decode_part(
     }
     let mut film = Film::new(w as u32, h as u32);
     let mut words = ints.iter();
-    for data in [&mut film.sum, &mut film.sum_sq] {
-        for c in 0..CHANNELS.len() {
-            for word in 0..4 {
-                let v = words.next().ok_or("missing sums channel")?;
-                for (p, &x) in data.iter_mut().zip(v.iter()) {
-                    p[c] = (p[c] as u128 | (x as u128) << (32 * word)) as i128;
-                }
-            }
-        }
-    }
+    read_words(&mut words, &mut film.sum)?;
+    read_words(&mut words, &mut film.sum_sq)?;
     film.count
         .copy_from_slice(words.next().ok_or("missing count channel")?);
+    if splats {
+        film.splat = vec![[0; 3]; film.sum.len()];
+        read_words(&mut words, &mut film.splat)?;
+        film.splat_paths = splat_paths;
+    }
     let more = words.map(|v| v.to_vec()).collect();
     Ok((Part { meta, film }, more))
 }
@@ -724,6 +775,52 @@ fn starts_with_key(s: &str) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A film's splats survive a sums file bit for bit, and their path count is under the
+    /// checksum: a file whose `splat_paths` was changed is refused.
+    #[test]
+    fn splats_round_trip_through_sums_files() {
+        let (w, h) = (3u32, 2u32);
+        let mut s = crate::render::RenderSettings {
+            width: w,
+            height: h,
+            spp: 2,
+            seed: 1,
+            camera: None,
+            params: Default::default(),
+            sampler: Default::default(),
+            threads: None,
+            crop: None,
+            backend: Default::default(),
+        };
+        s.params.shadow_rays = 1;
+        let meta = PartMeta::new(Path::new("x.toml"), b"scene", "", &s, Pass { k: 1, n: 1 });
+        let mut film = Film::new(w, h);
+        let mut px = crate::film::PixelSums::default();
+        px.add(crate::Color::new(0.5, 1.0, 2.0));
+        film.set_pixel(1, 1, &px);
+        let mut splats = crate::film::Splats::default();
+        splats.add(2, 0, w, crate::Color::new(3.0, -1e-7, 1e9));
+        splats.paths = 7 << 33;
+        film.add_splats(&splats);
+        let dir = std::env::temp_dir().join(format!("mcrt-splat-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("s.exr");
+        let part = Part { meta, film };
+        write_part(&path, &part).unwrap();
+        let back = read_part(&path).unwrap();
+        assert!(back.film == part.film, "splats lost in the sums file");
+        // The same bytes with another path count in the metadata.
+        let mut bytes = std::fs::read(&path).unwrap();
+        let at = bytes
+            .windows(12)
+            .position(|w| w == b"splat_paths=")
+            .unwrap();
+        bytes[at + 12] = if bytes[at + 12] == b'1' { b'2' } else { b'1' };
+        let err = decode_part(&bytes, &[]).map(|_| ()).unwrap_err();
+        assert!(err.contains("checksum"), "{err}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn the_differing_setting_is_named() {
