@@ -383,22 +383,31 @@ fn write_part_exr(path: &Path, part: &Part, extra: &[(&str, &[u32])]) -> Result<
         .map_err(|e| e.to_string())
 }
 
-/// Reads a sums file written by [`write_part`]: beyond [`read_part_with`]'s checks, no
-/// pixel counts more samples than the pass holds.
+/// Reads a sums file written by [`write_part`] (once, through [`crate::input::read`]).
 pub fn read_part(path: &Path) -> std::result::Result<Part, PartsError> {
-    let part = read_part_with(path, &[])?.0;
+    let bytes = crate::input::read(path).map_err(|message| PartsError::Read {
+        path: path.to_path_buf(),
+        message,
+    })?;
+    decode_sums(&bytes).map_err(|message| PartsError::Read {
+        path: path.to_path_buf(),
+        message,
+    })
+}
+
+/// Decodes a sums file's bytes: beyond [`decode_part`]'s checks, no pixel counts more
+/// samples than the pass holds.
+pub fn decode_sums(bytes: &[u8]) -> std::result::Result<Part, String> {
+    let part = decode_part(bytes, &[])?.0;
     if let Some(i) = part.film.count.iter().position(|&c| c > part.meta.count) {
         let w = part.film.width.max(1) as usize;
-        return Err(PartsError::Read {
-            path: path.to_path_buf(),
-            message: format!(
-                "pixel ({}, {}) counts {} samples, but the pass holds {}",
-                i % w,
-                i / w,
-                part.film.count[i],
-                part.meta.count
-            ),
-        });
+        return Err(format!(
+            "pixel ({}, {}) counts {} samples, but the pass holds {}",
+            i % w,
+            i / w,
+            part.film.count[i],
+            part.meta.count
+        ));
     }
     Ok(part)
 }
