@@ -94,7 +94,7 @@ impl Checkpoint {
         }
         if m.settings != now.settings {
             let (a, b) = parts::settings_difference(&m.settings, &now.settings);
-            return Err(differ("setting", a, b));
+            return Err(differ("settings", a, b));
         }
         Ok(())
     }

@@ -293,8 +293,7 @@ pub fn write_part_with(
     write_atomic(path, |tmp| write_part_exr(tmp, part, extra))
 }
 
-/// The names of a sums file's integer channels, in the order their checksum takes them:
-/// the sums' words, `count`, then `extra`.
+/// The names of a sums file's integer channels: the sums' words, `count`, then `extra`.
 fn integer_channels(extra: &[&str]) -> Vec<String> {
     let mut names = Vec::with_capacity(QUANTITIES.len() * CHANNELS.len() * 4 + 1 + extra.len());
     for qname in QUANTITIES {
@@ -309,14 +308,17 @@ fn integer_channels(extra: &[&str]) -> Vec<String> {
     names
 }
 
-/// The checksum a sums file carries (`checksum=` in its metadata) of its integer channels in
-/// [`integer_channels`] order: FNV-1a (64-bit) over each name's bytes and each value as one
-/// word. A file whose sums, counts or `next` were changed after it was written (a forged or
-/// damaged checkpoint) no longer matches it.
+/// The checksum a sums file carries (`checksum=` in its metadata) of all its integer
+/// channels, taken in the order of their names (whichever of them a reader asks for, so a
+/// checkpoint is also a sums file): FNV-1a (64-bit) over each name's bytes and each value as
+/// one word. A file whose sums, counts or `next` were changed after it was written (a forged
+/// or damaged checkpoint) no longer matches it.
 pub fn checksum<'a>(channels: impl IntoIterator<Item = (&'a str, &'a [u32])>) -> u64 {
     const PRIME: u64 = 0x0100_0000_01b3;
     let mut h = 0xcbf2_9ce4_8422_2325u64;
-    for (name, values) in channels {
+    let mut sorted: Vec<(&str, &[u32])> = channels.into_iter().collect();
+    sorted.sort_by(|a, b| a.0.cmp(b.0));
+    for (name, values) in sorted {
         for &b in name.as_bytes() {
             h = (h ^ b as u64).wrapping_mul(PRIME);
         }
@@ -488,7 +490,11 @@ pub fn decode_part(
         .lines()
         .find_map(|l| l.strip_prefix("checksum="))
         .ok_or("the metadata lacks 'checksum'")?;
-    let sum = checksum(names.iter().map(|n| n.as_str()).zip(ints.iter().copied()));
+    let all = layer.channel_data.list.iter().filter_map(|c| match &c.sample_data {
+        FlatSamples::U32(v) => Some((std::str::from_utf8(c.name.bytes()).unwrap_or(""), &v[..])),
+        _ => None,
+    });
+    let sum = checksum(all);
     if u64::from_str_radix(stated, 16).ok() != Some(sum) {
         return Err(format!(
             "its channels do not match their checksum ({} in the metadata, {sum:016x} \
