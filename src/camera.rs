@@ -92,10 +92,7 @@ impl CameraDesc {
     pub fn validate(&self) -> Result<(), String> {
         match *self {
             CameraDesc::Perspective {
-                origin,
-                target,
-                up,
-                ..
+                origin, target, up, ..
             } => {
                 let (o, t) = (origin.as_dvec3(), target.as_dvec3());
                 let fwd = t - o;

@@ -363,7 +363,12 @@ fn write_part_exr(path: &Path, part: &Part, extra: &[(&str, &[u32])]) -> Result<
     }
     let extra_names: Vec<&str> = extra.iter().map(|(n, _)| *n).collect();
     let names = integer_channels(&extra_names);
-    let sum = checksum(names.iter().map(|n| n.as_str()).zip(ints.iter().map(|v| &v[..])));
+    let sum = checksum(
+        names
+            .iter()
+            .map(|n| n.as_str())
+            .zip(ints.iter().map(|v| &v[..])),
+    );
     for (name, v) in names.iter().zip(ints) {
         channels.push(AnyChannel::new(name.as_str(), FlatSamples::U32(v)));
     }
@@ -455,7 +460,9 @@ pub fn decode_part(
         .attributes
         .other
         .get(ATTRIBUTE.as_bytes())
-        .ok_or_else(|| format!("no '{ATTRIBUTE}' attribute (not written by 'mcrt render --pass')"))?;
+        .ok_or_else(|| {
+            format!("no '{ATTRIBUTE}' attribute (not written by 'mcrt render --pass')")
+        })?;
     let AttributeValue::Text(text) = text else {
         return Err(format!("the '{ATTRIBUTE}' attribute is not text"));
     };
@@ -490,10 +497,16 @@ pub fn decode_part(
         .lines()
         .find_map(|l| l.strip_prefix("checksum="))
         .ok_or("the metadata lacks 'checksum'")?;
-    let all = layer.channel_data.list.iter().filter_map(|c| match &c.sample_data {
-        FlatSamples::U32(v) => Some((std::str::from_utf8(c.name.bytes()).unwrap_or(""), &v[..])),
-        _ => None,
-    });
+    let all = layer
+        .channel_data
+        .list
+        .iter()
+        .filter_map(|c| match &c.sample_data {
+            FlatSamples::U32(v) => {
+                Some((std::str::from_utf8(c.name.bytes()).unwrap_or(""), &v[..]))
+            }
+            _ => None,
+        });
     let sum = checksum(all);
     if u64::from_str_radix(stated, 16).ok() != Some(sum) {
         return Err(format!(
@@ -514,7 +527,8 @@ pub fn decode_part(
             }
         }
     }
-    film.count.copy_from_slice(words.next().ok_or("missing count channel")?);
+    film.count
+        .copy_from_slice(words.next().ok_or("missing count channel")?);
     let more = words.map(|v| v.to_vec()).collect();
     Ok((Part { meta, film }, more))
 }

@@ -150,7 +150,10 @@ bad_input!(
     toml_pinhole_collinear_corners_toml,
     "toml-pinhole-collinear-corners.toml"
 );
-bad_input!(toml_pinhole_eye_in_plane_toml, "toml-pinhole-eye-in-plane.toml");
+bad_input!(
+    toml_pinhole_eye_in_plane_toml,
+    "toml-pinhole-eye-in-plane.toml"
+);
 bad_input!(
     toml_radius_overflows_f32_toml,
     "toml-radius-overflows-f32.toml"

@@ -56,7 +56,11 @@ fn refused(o: &Output, fragments: &[&str], out: &Path) {
     for f in fragments {
         assert!(err.contains(f), "the message should say {f:?}:\n{err}");
     }
-    assert!(err.len() < 600, "the message is {} bytes long:\n{err}", err.len());
+    assert!(
+        err.len() < 600,
+        "the message is {} bytes long:\n{err}",
+        err.len()
+    );
     assert!(!out.exists(), "an output was written");
 }
 
@@ -80,7 +84,10 @@ fn texture_scene(dir: &TempDir, file: &Path) -> PathBuf {
         "scene.toml",
         &scene_toml(
             "\"t\"",
-            &format!("[texture.t]\ntype = \"bitmap\"\nfile = {:?}\n", file.display().to_string()),
+            &format!(
+                "[texture.t]\ntype = \"bitmap\"\nfile = {:?}\n",
+                file.display().to_string()
+            ),
         ),
     )
 }
@@ -229,7 +236,11 @@ fn special_files_are_refused_as_what_they_are() {
     let fifo = dir.path().join("pipe.toml");
     mkfifo(&fifo);
     let o = run_limited(&args(&[&"render", &fifo, &"-o", &out]), true);
-    refused(&o, &["pipe.toml", "is a FIFO (named pipe), not a regular file"], &out);
+    refused(
+        &o,
+        &["pipe.toml", "is a FIFO (named pipe), not a regular file"],
+        &out,
+    );
 
     let zero = dir.path().join("zero.toml");
     std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
@@ -256,7 +267,10 @@ fn special_files_are_refused_as_what_they_are() {
     mkfifo(&mesh_fifo);
     let mesh_zero = dir.path().join("z.ply");
     std::os::unix::fs::symlink("/dev/zero", &mesh_zero).unwrap();
-    for (mesh, what) in [(&mesh_fifo, "is a FIFO"), (&mesh_zero, "is a character device")] {
+    for (mesh, what) in [
+        (&mesh_fifo, "is a FIFO"),
+        (&mesh_zero, "is a character device"),
+    ] {
         let s = dir.write(
             "mesh.toml",
             &format!(
@@ -290,7 +304,10 @@ fn special_files_are_refused_as_what_they_are() {
     let ck = dir.path().join("ck.exr");
     mkfifo(&ck);
     let plain = dir.write("plain.toml", &scene_toml("0.5", ""));
-    let o = run_limited(&args(&[&"render", &plain, &"-o", &out, &"--resume", &ck]), true);
+    let o = run_limited(
+        &args(&[&"render", &plain, &"-o", &out, &"--resume", &ck]),
+        true,
+    );
     refused(&o, &["ck.exr", "is a FIFO"], &out);
     let o = run_limited(&args(&[&"compare", &ck, &ck]), true);
     refused(&o, &["ck.exr", "is a FIFO"], &out);
@@ -358,7 +375,10 @@ fn obj_with_byte_order_mark_is_the_same_mesh() {
     let dir = TempDir::new("bom");
     let body = "v -1 -1 2\nv 1 -1 2\nv -1 1 2\nv 1 1 2\nf 1 2 3\nf 2 4 3\n";
     let mut images = Vec::new();
-    for (name, text) in [("plain", body.to_string()), ("bom", format!("\u{feff}{body}"))] {
+    for (name, text) in [
+        ("plain", body.to_string()),
+        ("bom", format!("\u{feff}{body}")),
+    ] {
         let mesh = dir.write(&format!("{name}.obj"), &text);
         let s = dir.write(
             &format!("{name}.toml"),
@@ -373,7 +393,10 @@ fn obj_with_byte_order_mark_is_the_same_mesh() {
         assert_eq!(o.status.code(), Some(0), "{name}: {}", stderr_of(&o));
         images.push(std::fs::read(&out).unwrap());
     }
-    assert!(images[0] == images[1], "the byte-order mark changed the mesh");
+    assert!(
+        images[0] == images[1],
+        "the byte-order mark changed the mesh"
+    );
 }
 
 /// Renders `scene` at 8 × 8, 2 spp, writing a checkpoint; returns (output, checkpoint).
@@ -381,8 +404,18 @@ fn render_with_checkpoint(dir: &TempDir, scene: &Path, extra: &[&str]) -> (PathB
     let out = dir.path().join("out.exr");
     let ck = dir.path().join("ck.exr");
     let base: [&dyn AsRef<OsStr>; 12] = [
-        &"render", &scene, &"-o", &out, &"--checkpoint", &ck, &"--spp", &"2", &"--width",
-        &"8", &"--height", &"8",
+        &"render",
+        &scene,
+        &"-o",
+        &out,
+        &"--checkpoint",
+        &ck,
+        &"--spp",
+        &"2",
+        &"--width",
+        &"8",
+        &"--height",
+        &"8",
     ];
     let mut a: Vec<&OsStr> = args(&base);
     a.push(OsStr::new("-q"));
@@ -419,8 +452,19 @@ fn forged_or_mismatched_checkpoints_are_refused() {
     forge_next(&ck, 3);
     std::fs::remove_file(&out).unwrap();
     let o = run(&args(&[
-        &"render", &scene, &"-o", &out, &"--resume", &ck, &"--spp", &"8", &"--width", &"8",
-        &"--height", &"8", &"-q",
+        &"render",
+        &scene,
+        &"-o",
+        &out,
+        &"--resume",
+        &ck,
+        &"--spp",
+        &"8",
+        &"--width",
+        &"8",
+        &"--height",
+        &"8",
+        &"-q",
     ]));
     refused(&o, &["ck.exr", "checksum"], &out);
 
@@ -431,16 +475,40 @@ fn forged_or_mismatched_checkpoints_are_refused() {
     mcrt::parts::write_part_with(&ck, &part, &[("next", &more[0])]).unwrap();
     std::fs::remove_file(&out).unwrap();
     let o = run(&args(&[
-        &"render", &scene, &"-o", &out, &"--resume", &ck, &"--spp", &"8", &"--width", &"8",
-        &"--height", &"8", &"-q",
+        &"render",
+        &scene,
+        &"-o",
+        &out,
+        &"--resume",
+        &ck,
+        &"--spp",
+        &"8",
+        &"--width",
+        &"8",
+        &"--height",
+        &"8",
+        &"-q",
     ]));
     refused(&o, &["ck.exr", "'next' channel holds 5 to 5 samples"], &out);
 
     let (out, ck) = render_with_checkpoint(&dir, &scene, &["--shadow-rays", "1"]);
     std::fs::remove_file(&out).unwrap();
     let o = run(&args(&[
-        &"render", &scene, &"-o", &out, &"--resume", &ck, &"--spp", &"8", &"--width", &"8",
-        &"--height", &"8", &"-q", &"--shadow-rays", &"4",
+        &"render",
+        &scene,
+        &"-o",
+        &out,
+        &"--resume",
+        &ck,
+        &"--spp",
+        &"8",
+        &"--width",
+        &"8",
+        &"--height",
+        &"8",
+        &"-q",
+        &"--shadow-rays",
+        &"4",
     ]));
     refused(&o, &["shadow_rays: 1", "shadow_rays: 4"], &out);
     assert!(stderr_of(&o).len() < 300, "{}", stderr_of(&o));

@@ -253,7 +253,10 @@ impl Ctx<'_> {
         match v.get_ref() {
             ColorT::Texture(name) => match tex.ids.get(name.as_str()) {
                 // A texture as a reflectance obeys the rule of a constant one, texel by texel.
-                Some(&i) => match crate::texture::color_fault(Color::splat(tex.list[i as usize].max()), Some(1.0)) {
+                Some(&i) => match crate::texture::color_fault(
+                    Color::splat(tex.list[i as usize].max()),
+                    Some(1.0),
+                ) {
                     Some(f) => self.err(
                         v.span(),
                         format!(

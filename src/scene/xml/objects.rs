@@ -148,8 +148,10 @@ impl<'a> Builder<'a> {
             fov_axis,
         };
         camera.validate().map_err(|why| {
-            self.doc
-                .err(e, format!("the sensor's to_world is degenerate: the camera {why}"))
+            self.doc.err(
+                e,
+                format!("the sensor's to_world is degenerate: the camera {why}"),
+            )
         })?;
         self.desc.cameras.push((name, camera));
         for &obj in &p.objects {
