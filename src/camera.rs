@@ -68,7 +68,93 @@ pub struct Camera {
     pub(crate) height: u32,
 }
 
+/// The smallest sine of the angle between two directions that must not be parallel (a
+/// perspective camera's view and up; the edges of a pinhole's image plane at a corner):
+/// 0.001, about 0.06°. Below it the cross product that orients the image is mostly rounding
+/// error (f32 carries about 7 digits), and the image may come out rotated or upside down.
+pub const MIN_SINE: f64 = 1e-3;
+
+/// The sine of the angle between `a` and `b`, in f64 (no overflow for any finite f32); 0
+/// when either is zero.
+fn sine(a: glam::DVec3, b: glam::DVec3) -> f64 {
+    let (la, lb) = (a.length(), b.length());
+    if la == 0.0 || lb == 0.0 {
+        return 0.0;
+    }
+    ((a / la).cross(b / lb)).length()
+}
+
 impl CameraDesc {
+    /// Refuses a camera that defines no image, or one whose orientation rounding decides:
+    /// a perspective camera whose target is its origin or whose up vector is parallel to
+    /// the view direction (within [`MIN_SINE`]); a pinhole whose corners coincide, lie on
+    /// one line, or whose eye lies in the image plane. Err completes "the camera …".
+    pub fn validate(&self) -> Result<(), String> {
+        match *self {
+            CameraDesc::Perspective {
+                origin, target, up, ..
+            } => {
+                let (o, t) = (origin.as_dvec3(), target.as_dvec3());
+                let fwd = t - o;
+                // The view direction as the renderer computes it, in f32, must be a direction.
+                if fwd == glam::DVec3::ZERO
+                    || !(target - origin).normalize_or_zero().is_normalized()
+                {
+                    return Err("has its target at its origin: no view direction".into());
+                }
+                if sine(fwd, up.as_dvec3()) < MIN_SINE {
+                    return Err(format!(
+                        "has its up vector ({}, {}, {}) parallel to its view direction \
+                         ({}, {}, {}) (within {MIN_SINE} in the sine of their angle): \
+                         which way is up is left to rounding",
+                        up.x, up.y, up.z, fwd.x, fwd.y, fwd.z
+                    ));
+                }
+                Ok(())
+            }
+            CameraDesc::Pinhole {
+                eye,
+                top_left,
+                top_right,
+                bottom_left,
+                bottom_right,
+            } => {
+                let (tl, tr, bl) = (
+                    top_left.as_dvec3(),
+                    top_right.as_dvec3(),
+                    bottom_left.as_dvec3(),
+                );
+                let br = bottom_right.map_or(tr + bl - tl, |b| b.as_dvec3());
+                // Each corner with its two neighbours: the edges there must span a plane.
+                let corners = [
+                    ("top_left", tl, tr, bl),
+                    ("top_right", tr, br, tl),
+                    ("bottom_right", br, bl, tr),
+                    ("bottom_left", bl, tl, br),
+                ];
+                for (name, c, a, b) in corners {
+                    if sine(a - c, b - c) < MIN_SINE {
+                        return Err(format!(
+                            "has a degenerate image plane: at its {name} corner the edges \
+                             to the neighbouring corners are zero or parallel (corners \
+                             that coincide or lie on one line)"
+                        ));
+                    }
+                }
+                let n = (tr - tl).cross(bl - tl).normalize();
+                let size = (tr - tl).length().max((bl - tl).length());
+                if ((tl - eye.as_dvec3()).dot(n)).abs() < MIN_SINE * size {
+                    return Err(
+                        "has its eye in the plane of its image corners: no ray would cross \
+                         the image"
+                            .into(),
+                    );
+                }
+                Ok(())
+            }
+        }
+    }
+
     pub fn build(&self, width: u32, height: u32) -> Camera {
         let (eye, tl, tr, bl, br) = match *self {
             CameraDesc::Pinhole {

@@ -96,7 +96,7 @@ impl Checkpoint {
         }
         if m.settings != now.settings {
             let (a, b) = parts::settings_difference(&m.settings, &now.settings);
-            return Err(differ("setting", a, b));
+            return Err(differ("settings", a, b));
         }
         Ok(())
     }
@@ -136,22 +136,29 @@ fn check_counts(part: &Part, next: &[u32]) -> Result<(), String> {
     Ok(())
 }
 
-/// Reads a checkpoint written by [`write_checkpoint`].
+/// Reads a checkpoint written by [`write_checkpoint`] (once, through
+/// [`crate::input::read`]).
 pub fn read_checkpoint(path: &Path) -> Result<Checkpoint, PartsError> {
-    let (part, mut more) = parts::read_part_with(path, &[NEXT]).map_err(|e| match e {
-        PartsError::Read { path, message } if message.contains("no channel 'next'") => {
-            PartsError::Read {
-                path,
-                message: "not a checkpoint (no 'next' channel): a sums file of `--pass`?".into(),
-            }
-        }
-        e => e,
-    })?;
-    let next = more.remove(0);
-    check_counts(&part, &next).map_err(|message| PartsError::Read {
+    let err = |message: String| PartsError::Read {
         path: path.to_path_buf(),
         message,
+    };
+    let bytes = crate::input::read(path).map_err(err)?;
+    decode_checkpoint(&bytes).map_err(err)
+}
+
+/// Decodes a checkpoint's bytes: a sums file ([`parts::decode_part`]) with a `next` channel
+/// whose counts agree with its film and metadata.
+pub fn decode_checkpoint(bytes: &[u8]) -> Result<Checkpoint, String> {
+    let (part, mut more) = parts::decode_part(bytes, &[NEXT]).map_err(|message| {
+        if message.contains("no channel 'next'") {
+            "not a checkpoint (no 'next' channel): a sums file of `--pass`?".into()
+        } else {
+            message
+        }
     })?;
+    let next = more.remove(0);
+    check_counts(&part, &next)?;
     Ok(Checkpoint {
         meta: part.meta,
         film: part.film,

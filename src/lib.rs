@@ -195,7 +195,7 @@ fn address_space_left() -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
     let line = status.lines().find(|l| l.starts_with("VmSize:"))?;
     let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some((lim.rlim_cur as u64).saturating_sub(kb * 1024))
+    Some(lim.rlim_cur.saturating_sub(kb * 1024))
 }
 
 #[cfg(not(target_os = "linux"))]

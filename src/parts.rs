@@ -293,8 +293,8 @@ pub fn write_part_with(
     write_atomic(path, |tmp| write_part_exr(tmp, part, extra))
 }
 
-/// The names of a sums file's integer channels, in the order their checksum takes them:
-/// the sums' words, `count`, the splats' words if the film has splats, then `extra`.
+/// The names of a sums file's integer channels: the sums' words, `count`, the splats' words
+/// if the film has splats, then `extra`.
 fn integer_channels(extra: &[&str], splats: bool) -> Vec<String> {
     let mut names = Vec::with_capacity(QUANTITIES.len() * CHANNELS.len() * 4 + 1 + extra.len());
     let words = |names: &mut Vec<String>, qname: &str| {
@@ -348,26 +348,30 @@ fn read_words<'a>(
     Ok(())
 }
 
-/// The checksum of the channels and of the splats' path count.
-fn checksum_of(names: &[String], ints: &[&[u32]], splat_paths: u64) -> u64 {
+/// The [`checksum`] of integer channels (name, values) and of the splats' path count.
+fn checksum_of<'a>(
+    channels: impl IntoIterator<Item = (&'a str, &'a [u32])>,
+    splat_paths: u64,
+) -> u64 {
     let paths = [splat_paths as u32, (splat_paths >> 32) as u32];
-    checksum(
-        names
-            .iter()
-            .map(|n| n.as_str())
-            .zip(ints.iter().copied())
-            .chain((splat_paths > 0).then_some(("splat_paths", &paths[..]))),
-    )
+    let mut all: Vec<(&str, &[u32])> = channels.into_iter().collect();
+    if splat_paths > 0 {
+        all.push(("splat_paths", &paths[..]));
+    }
+    checksum(all)
 }
 
-/// The checksum a sums file carries (`checksum=` in its metadata) of its integer channels in
-/// [`integer_channels`] order: FNV-1a (64-bit) over each name's bytes and each value as one
-/// word. A file whose sums, counts or `next` were changed after it was written (a forged or
-/// damaged checkpoint) no longer matches it.
+/// The checksum a sums file carries (`checksum=` in its metadata) of all its integer
+/// channels, taken in the order of their names (whichever of them a reader asks for, so a
+/// checkpoint is also a sums file): FNV-1a (64-bit) over each name's bytes and each value as
+/// one word. A file whose sums, counts or `next` were changed after it was written (a forged
+/// or damaged checkpoint) no longer matches it.
 pub fn checksum<'a>(channels: impl IntoIterator<Item = (&'a str, &'a [u32])>) -> u64 {
     const PRIME: u64 = 0x0100_0000_01b3;
     let mut h = 0xcbf2_9ce4_8422_2325u64;
-    for (name, values) in channels {
+    let mut sorted: Vec<(&str, &[u32])> = channels.into_iter().collect();
+    sorted.sort_by(|a, b| a.0.cmp(b.0));
+    for (name, values) in sorted {
         for &b in name.as_bytes() {
             h = (h ^ b as u64).wrapping_mul(PRIME);
         }
@@ -407,8 +411,13 @@ fn write_part_exr(path: &Path, part: &Part, extra: &[(&str, &[u32])]) -> Result<
     }
     let extra_names: Vec<&str> = extra.iter().map(|(n, _)| *n).collect();
     let names = integer_channels(&extra_names, splats);
-    let refs: Vec<&[u32]> = ints.iter().map(|v| &v[..]).collect();
-    let sum = checksum_of(&names, &refs, f.splat_paths);
+    let sum = checksum_of(
+        names
+            .iter()
+            .map(|n| n.as_str())
+            .zip(ints.iter().map(|v| &v[..])),
+        f.splat_paths,
+    );
     for (name, v) in names.iter().zip(ints) {
         channels.push(AnyChannel::new(name.as_str(), FlatSamples::U32(v)));
     }
@@ -434,22 +443,31 @@ fn write_part_exr(path: &Path, part: &Part, extra: &[(&str, &[u32])]) -> Result<
         .map_err(|e| e.to_string())
 }
 
-/// Reads a sums file written by [`write_part`]: beyond [`read_part_with`]'s checks, no
-/// pixel counts more samples than the pass holds.
+/// Reads a sums file written by [`write_part`] (once, through [`crate::input::read`]).
 pub fn read_part(path: &Path) -> std::result::Result<Part, PartsError> {
-    let part = read_part_with(path, &[])?.0;
+    let bytes = crate::input::read(path).map_err(|message| PartsError::Read {
+        path: path.to_path_buf(),
+        message,
+    })?;
+    decode_sums(&bytes).map_err(|message| PartsError::Read {
+        path: path.to_path_buf(),
+        message,
+    })
+}
+
+/// Decodes a sums file's bytes: beyond [`decode_part`]'s checks, no pixel counts more
+/// samples than the pass holds.
+pub fn decode_sums(bytes: &[u8]) -> std::result::Result<Part, String> {
+    let part = decode_part(bytes, &[])?.0;
     if let Some(i) = part.film.count.iter().position(|&c| c > part.meta.count) {
         let w = part.film.width.max(1) as usize;
-        return Err(PartsError::Read {
-            path: path.to_path_buf(),
-            message: format!(
-                "pixel ({}, {}) counts {} samples, but the pass holds {}",
-                i % w,
-                i / w,
-                part.film.count[i],
-                part.meta.count
-            ),
-        });
+        return Err(format!(
+            "pixel ({}, {}) counts {} samples, but the pass holds {}",
+            i % w,
+            i / w,
+            part.film.count[i],
+            part.meta.count
+        ));
     }
     Ok(part)
 }
@@ -540,7 +558,17 @@ pub fn decode_part(
         .lines()
         .find_map(|l| l.strip_prefix("checksum="))
         .ok_or("the metadata lacks 'checksum'")?;
-    let sum = checksum_of(&names, &ints, splat_paths);
+    let all = layer
+        .channel_data
+        .list
+        .iter()
+        .filter_map(|c| match &c.sample_data {
+            FlatSamples::U32(v) => {
+                Some((std::str::from_utf8(c.name.bytes()).unwrap_or(""), &v[..]))
+            }
+            _ => None,
+        });
+    let sum = checksum_of(all, splat_paths);
     if u64::from_str_radix(stated, 16).ok() != Some(sum) {
         return Err(format!(
             "its channels do not match their checksum ({} in the metadata, {sum:016x} \

@@ -138,6 +138,30 @@ bad_input!(
     toml_rr_survival_above_one_toml,
     "toml-rr-survival-above-one.toml"
 );
+bad_input!(
+    toml_camera_up_nearly_parallel_toml,
+    "toml-camera-up-nearly-parallel.toml"
+);
+bad_input!(
+    toml_pinhole_identical_corners_toml,
+    "toml-pinhole-identical-corners.toml"
+);
+bad_input!(
+    toml_pinhole_collinear_corners_toml,
+    "toml-pinhole-collinear-corners.toml"
+);
+bad_input!(
+    toml_pinhole_eye_in_plane_toml,
+    "toml-pinhole-eye-in-plane.toml"
+);
+bad_input!(
+    toml_radius_overflows_f32_toml,
+    "toml-radius-overflows-f32.toml"
+);
+bad_input!(
+    toml_radius_underflows_f32_toml,
+    "toml-radius-underflows-f32.toml"
+);
 bad_input!(toml_spp_too_large_toml, "toml-spp-too-large.toml");
 bad_input!(
     toml_syntax_unclosed_table_toml,

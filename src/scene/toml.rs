@@ -350,8 +350,70 @@ pub fn load_toml(path: &Path) -> Result<SceneDesc, SceneError> {
     parse_toml(path, &text)
 }
 
+/// Every number of a scene is read as an f32; TOML's are f64. A value beyond f32's range
+/// would become infinite (and be refused as "must be positive" or "finite", which it was
+/// not), one too small would become 0: this pass over the whole file refuses both, each at
+/// its place, before the file is read into its tables.
+struct F32Range;
+
+impl<'de> Deserialize<'de> for F32Range {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        d.deserialize_any(F32Range)
+    }
+}
+
+impl<'de> serde::de::Visitor<'de> for F32Range {
+    type Value = F32Range;
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("any TOML value")
+    }
+    fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<F32Range, E> {
+        if v.is_finite() && v.abs() > f32::MAX as f64 {
+            return Err(E::custom(format!(
+                "{v:e} is out of range: numbers are 32-bit floats, at most about 3.4e38"
+            )));
+        }
+        if v != 0.0 && v as f32 == 0.0 {
+            return Err(E::custom(format!(
+                "{v:e} is too small: numbers are 32-bit floats, and it would round to 0"
+            )));
+        }
+        Ok(F32Range)
+    }
+    fn visit_i64<E>(self, _: i64) -> Result<F32Range, E> {
+        Ok(F32Range)
+    }
+    fn visit_u64<E>(self, _: u64) -> Result<F32Range, E> {
+        Ok(F32Range)
+    }
+    fn visit_bool<E>(self, _: bool) -> Result<F32Range, E> {
+        Ok(F32Range)
+    }
+    fn visit_str<E>(self, _: &str) -> Result<F32Range, E> {
+        Ok(F32Range)
+    }
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut a: A) -> Result<F32Range, A::Error> {
+        while a.next_element::<F32Range>()?.is_some() {}
+        Ok(F32Range)
+    }
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, mut a: A) -> Result<F32Range, A::Error> {
+        while a.next_key::<serde::de::IgnoredAny>()?.is_some() {
+            a.next_value::<F32Range>()?;
+        }
+        Ok(F32Range)
+    }
+}
+
 pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
     let cx = Ctx { path, text };
+    let toml_error = |e: toml::de::Error| {
+        let msg = e.message().trim().to_string();
+        match e.span() {
+            Some(s) => SceneError::at(path, text, s.start, msg),
+            None => SceneError::new(path, None, msg),
+        }
+    };
+    toml::from_str::<F32Range>(text).map_err(toml_error)?;
     let file: FileT = toml::from_str(text).map_err(|e| {
         let msg = e.message().trim().to_string();
         match e.span() {
@@ -373,7 +435,10 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
         if desc.cameras.iter().any(|(n, _)| *n == name) {
             return cx.err(
                 c.name.span(),
-                format!("a camera named '{name}' is already defined"),
+                format!(
+                    "a camera named '{}' is already defined",
+                    crate::input::shorten(&name)
+                ),
             );
         }
         let present = [
@@ -433,10 +498,6 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                 if !(fov.get_ref() > &0.0 && fov.get_ref() < &180.0) {
                     return cx.err(fov.span(), "'fov' must be between 0 and 180 degrees");
                 }
-                let fwd = target - origin;
-                if fwd.length_squared() == 0.0 || fwd.cross(up).length_squared() == 0.0 {
-                    return cx.err(at, "'target' must differ from 'origin', and 'up' must not be parallel to the view direction");
-                }
                 let fov_axis = match &c.fov_axis {
                     None => FovAxis::X,
                     Some(a) => FovAxis::parse(a.get_ref()).map_or_else(
@@ -464,6 +525,9 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                 )
             }
         };
+        if let Err(e) = cd.validate() {
+            return cx.err(at, format!("camera '{}' {e}", crate::input::shorten(&name)));
+        }
         desc.cameras.push((name, cd));
     }
 

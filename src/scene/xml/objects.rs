@@ -138,9 +138,6 @@ impl<'a> Builder<'a> {
         let origin = m.transform_point3(Vec3::ZERO);
         let dir = m.transform_vector3(Vec3::Z);
         let up = m.transform_vector3(Vec3::Y);
-        if dir.length_squared() == 0.0 || up.cross(dir).length_squared() == 0.0 {
-            return Err(self.doc.err(e, "the sensor's to_world is degenerate"));
-        }
         let name = e.attr("id").map(str::to_string).unwrap_or_else(|| {
             if index == 0 {
                 "default".into()
@@ -148,16 +145,20 @@ impl<'a> Builder<'a> {
                 format!("sensor{index}")
             }
         });
-        self.desc.cameras.push((
-            name,
-            CameraDesc::Perspective {
-                origin,
-                target: origin + dir.normalize(),
-                up: up.normalize(),
-                fov,
-                fov_axis,
-            },
-        ));
+        let camera = CameraDesc::Perspective {
+            origin,
+            target: origin + dir.normalize_or_zero(),
+            up: up.normalize_or_zero(),
+            fov,
+            fov_axis,
+        };
+        camera.validate().map_err(|why| {
+            self.doc.err(
+                e,
+                format!("the sensor's to_world is degenerate: the camera {why}"),
+            )
+        })?;
+        self.desc.cameras.push((name, camera));
         for &obj in &p.objects {
             match obj.tag.as_str() {
                 "film" if index == 0 => self.film(obj)?,
