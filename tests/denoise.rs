@@ -58,31 +58,53 @@ fn denoised_cornell_box_has_a_third_of_the_error() {
         "--seed".as_ref(),
         "1".as_ref(),
         "--denoise".as_ref(),
+        "--aov".as_ref(),
+        "albedo,normal,emission".as_ref(),
         "-o".as_ref(),
         out.as_os_str(),
     ]);
     ok(&o, "render --denoise");
+    // The subcommand on the raw image and its layers, without the scene: the emission on
+    // the light's edges is the guide rays' (coverage noise left), so it does less well.
+    let cmd = dir.path().join("cmd.exr");
+    let raw_path = dir.path().join("box.raw.exr");
+    let o = run(&[
+        "denoise".as_ref(),
+        raw_path.as_os_str(),
+        "-o".as_ref(),
+        cmd.as_os_str(),
+    ]);
+    ok(&o, "mcrt denoise");
     let reference = reference("cornell-box.exr");
     let raw = read_exr(&dir.path().join("box.raw.exr")).expect("the raw image");
     let clean = read_exr(&out).expect("the denoised image");
     let e_raw = metrics(&raw, &reference).unwrap().rmse;
     let e_clean = metrics(&clean, &reference).unwrap().rmse;
-    eprintln!("Cornell box 256² at 16 spp against the reference: RMSE raw {e_raw:.5}, denoised {e_clean:.5} (ratio {:.3})", e_clean / e_raw);
+    let e_cmd = metrics(&read_exr(&cmd).unwrap(), &reference).unwrap().rmse;
+    eprintln!(
+        "Cornell box 256² at 16 spp against the reference: RMSE raw {e_raw:.5}, denoised \
+         {e_clean:.5} (ratio {:.3}); mcrt denoise on the raw EXR {e_cmd:.5}",
+        e_clean / e_raw
+    );
     assert!(e_clean < e_raw / 3.0, "raw {e_raw}, denoised {e_clean}");
+    assert!(
+        e_clean < e_cmd && e_cmd < e_raw,
+        "raw {e_raw}, mcrt denoise {e_cmd}"
+    );
     if let Some(keep) = std::env::var_os("MCRT_DENOISE_KEEP") {
         let keep = std::path::Path::new(&keep);
         std::fs::create_dir_all(keep).unwrap();
-        for name in ["box.exr", "box.raw.exr"] {
+        for name in ["box.exr", "box.raw.exr", "cmd.exr"] {
             std::fs::copy(dir.path().join(name), keep.join(name)).unwrap();
         }
     }
 }
 
-/// `mcrt denoise` on the EXR of `--aov albedo,normal` gives what `render --denoise` writes,
-/// and the raw output of `--denoise` is the plain render.
+/// The raw output of `--denoise` is the plain render; `mcrt denoise` with and without the
+/// emission layer, to EXR and PNG.
 #[test]
-fn denoise_subcommand_matches_the_render_flag() {
-    if !have_oidn("denoise_subcommand_matches_the_render_flag") {
+fn denoise_raw_output_and_subcommand() {
+    if !have_oidn("denoise_raw_output_and_subcommand") {
         return;
     }
     let dir = TempDir::new("denoise-cmd");
@@ -100,25 +122,34 @@ fn denoise_subcommand_matches_the_render_flag() {
     with(&plain, &["--aov", "albedo,normal,emission"]);
     let flagged = dir.path().join("flagged.exr");
     with(&flagged, &["--denoise"]);
+    let no_emission = dir.path().join("no-emission.exr");
+    with(&no_emission, &["--aov", "albedo,normal"]);
     let cmd_out = dir.path().join("cmd.exr");
-    let o = run(&[
-        "denoise".as_ref(),
-        plain.as_os_str(),
-        "-o".as_ref(),
-        cmd_out.as_os_str(),
-    ]);
-    ok(&o, "mcrt denoise");
-    let bits = |p: &std::path::Path| -> Vec<u32> {
-        read_exr(p)
-            .unwrap()
-            .pixels
-            .iter()
-            .flat_map(|c| c.to_array().map(f32::to_bits))
-            .collect()
-    };
-    assert_eq!(bits(&dir.path().join("flagged.raw.exr")), bits(&plain));
-    assert_eq!(bits(&flagged), bits(&cmd_out));
-    assert_ne!(bits(&flagged), bits(&plain), "denoising changed nothing");
+    let cmd_whole = dir.path().join("cmd-whole.exr");
+    for (input, output) in [(&plain, &cmd_out), (&no_emission, &cmd_whole)] {
+        let o = run(&[
+            "denoise".as_ref(),
+            input.as_os_str(),
+            "-o".as_ref(),
+            output.as_os_str(),
+        ]);
+        ok(&o, "mcrt denoise");
+    }
+    let image = |p: &std::path::Path| read_exr(p).unwrap();
+    let raw = image(&dir.path().join("flagged.raw.exr"));
+    assert!(
+        raw.pixels == image(&plain).pixels,
+        "the raw image is not the plain render"
+    );
+    let rmse =
+        |a: &std::path::Path, b: &std::path::Path| metrics(&image(a), &image(b)).unwrap().rmse;
+    assert!(rmse(&plain, &flagged) > 0.0, "denoising changed nothing");
+    assert!(rmse(&plain, &cmd_out) > 0.0, "mcrt denoise changed nothing");
+    // Without the emission layer the whole image goes through the filter.
+    assert!(
+        rmse(&cmd_whole, &cmd_out) > 0.0,
+        "the emission layer is ignored"
+    );
     // A PNG output of the subcommand.
     let png = dir.path().join("cmd.png");
     let o = run(&[
@@ -231,7 +262,7 @@ fn emission_guide_is_the_directly_seen_light() {
         .iter()
         .filter(|e| **e == glam::Vec3::ZERO)
         .count();
-    assert!(full >= 20, "{full} pixels see only the light");
+    assert!(full >= 10, "{full} pixels see only the light");
     assert!(partial >= 10, "{partial} pixels on its edges");
     assert_eq!(full + partial + zero, 64 * 64);
     s.params.hide_emitters = true;

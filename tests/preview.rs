@@ -97,7 +97,10 @@ impl Reply {
 fn request(addr: SocketAddr, method: &str, path: &str, headers: &[&str]) -> Reply {
     let mut s = TcpStream::connect_timeout(&addr, Duration::from_secs(10)).expect("connect");
     s.set_read_timeout(Some(Duration::from_secs(30))).unwrap();
-    let mut req = format!("{method} {path} HTTP/1.0\r\nHost: {addr}\r\n");
+    let mut req = format!("{method} {path} HTTP/1.0\r\n");
+    if !headers.iter().any(|h| h.starts_with("Host:")) {
+        req += &format!("Host: {addr}\r\n");
+    }
     for h in headers {
         req += &format!("{h}\r\n");
     }
