@@ -95,9 +95,20 @@ impl Reply {
 
 /// One HTTP/1.0 request (the server then answers with a plain body and closes).
 fn request(addr: SocketAddr, method: &str, path: &str, headers: &[&str]) -> Reply {
+    request_version(addr, "HTTP/1.0", method, path, headers)
+}
+
+/// One request; the body is read to its Content-Length, else to the end of the connection.
+fn request_version(
+    addr: SocketAddr,
+    version: &str,
+    method: &str,
+    path: &str,
+    headers: &[&str],
+) -> Reply {
     let mut s = TcpStream::connect_timeout(&addr, Duration::from_secs(10)).expect("connect");
     s.set_read_timeout(Some(Duration::from_secs(30))).unwrap();
-    let mut req = format!("{method} {path} HTTP/1.0\r\n");
+    let mut req = format!("{method} {path} {version}\r\n");
     if !headers.iter().any(|h| h.starts_with("Host:")) {
         req += &format!("Host: {addr}\r\n");
     }
@@ -107,11 +118,18 @@ fn request(addr: SocketAddr, method: &str, path: &str, headers: &[&str]) -> Repl
     req += "Content-Length: 0\r\n\r\n";
     s.write_all(req.as_bytes()).unwrap();
     let mut raw = Vec::new();
-    s.read_to_end(&mut raw).expect("read the response");
-    let split = raw
-        .windows(4)
-        .position(|w| w == b"\r\n\r\n")
-        .expect("a complete response head");
+    let mut buf = [0u8; 65536];
+    let split = loop {
+        if let Some(p) = raw.windows(4).position(|w| w == b"\r\n\r\n") {
+            break p;
+        }
+        let n = s.read(&mut buf).expect("read the response");
+        assert!(
+            n > 0,
+            "the connection closed before a complete response head"
+        );
+        raw.extend_from_slice(&buf[..n]);
+    };
     let head = String::from_utf8_lossy(&raw[..split]).into_owned();
     let mut lines = head.split("\r\n");
     let status = lines
@@ -119,14 +137,36 @@ fn request(addr: SocketAddr, method: &str, path: &str, headers: &[&str]) -> Repl
         .and_then(|l| l.split_whitespace().nth(1))
         .and_then(|c| c.parse().ok())
         .expect("a status line");
-    let headers = lines
+    let headers: Vec<(String, String)> = lines
         .filter_map(|l| l.split_once(':'))
         .map(|(n, v)| (n.trim().to_ascii_lowercase(), v.trim().to_string()))
         .collect();
+    let mut body = raw[split + 4..].to_vec();
+    let length = headers
+        .iter()
+        .find(|(n, _)| n == "content-length")
+        .and_then(|(_, v)| v.parse::<usize>().ok());
+    match length {
+        Some(len) => {
+            while body.len() < len {
+                let n = s.read(&mut buf).expect("read the body");
+                assert!(
+                    n > 0,
+                    "the connection closed {} bytes into a body of {len}",
+                    body.len()
+                );
+                body.extend_from_slice(&buf[..n]);
+            }
+            body.truncate(len);
+        }
+        None => {
+            s.read_to_end(&mut body).expect("read the body");
+        }
+    }
     Reply {
         status,
         headers,
-        body: raw[split + 4..].to_vec(),
+        body,
     }
 }
 
@@ -359,7 +399,8 @@ fn preview_updates_in_headless_chromium() {
         let mut titles: Vec<String> = Vec::new();
         let t = Instant::now();
         while t.elapsed() < Duration::from_secs(60) {
-            let list = get(devtools, "/json/list").text();
+            // Chromium's DevTools server speaks HTTP/1.1 only.
+            let list = request_version(devtools, "HTTP/1.1", "GET", "/json/list", &[]).text();
             for title in list
                 .lines()
                 .filter_map(|l| l.trim().strip_prefix("\"title\": \""))
