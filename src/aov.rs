@@ -109,13 +109,16 @@ pub struct Guides {
     pub depth: Vec<f32>,
 }
 
+/// One pixel's guides: albedo, normal, emission, whether the emission varied, depth.
+type GuidePixel = (Color, Vec3A, Color, bool, f32);
+
 /// Traces the guide rays ([`GUIDE_SPP`] per pixel) of the film window.
 pub fn render_guides(scene: &Scene, s: &RenderSettings) -> Result<Guides, RenderError> {
     let camera = camera_for(scene, s)?;
     let (ox, oy, fw, fh) = s.window();
     // As the integrators see emitters on the first segment (path.rs, direct.rs).
     let sees_emitters = !s.params.hide_emitters && s.params.max_depth != Some(0);
-    let rows: Vec<Vec<(Color, Vec3A, Color, bool, f32)>> = with_threads(s, || {
+    let rows: Vec<Vec<GuidePixel>> = with_threads(s, || {
         (0..fh)
             .into_par_iter()
             .map(|y| {
@@ -189,7 +192,7 @@ pub fn render_guides(scene: &Scene, s: &RenderSettings) -> Result<Guides, Render
             })
             .collect()
     })?;
-    let flat: Vec<(Color, Vec3A, Color, bool, f32)> = rows.into_iter().flatten().collect();
+    let flat: Vec<GuidePixel> = rows.into_iter().flatten().collect();
     Ok(Guides {
         albedo: flat.iter().map(|p| p.0).collect(),
         normal: flat.iter().map(|p| p.1).collect(),

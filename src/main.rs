@@ -585,8 +585,7 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
             None => write_image_with(&output, &film.image(), &opts, &layers)?,
             Some((oidn, raw)) => write_denoised(
                 oidn,
-                raw,
-                &output,
+                (&output, raw),
                 (&scene, &settings),
                 film,
                 guides.as_ref(),
@@ -955,11 +954,10 @@ fn load_denoiser(
     Ok(Some((oidn, raw)))
 }
 
-/// Writes the raw image to `raw` and the denoised one to `output`, both with `layers`.
+/// Writes the denoised image to `output` and the raw one to `raw`, both with `layers`.
 fn write_denoised(
     oidn: &mcrt::denoise::Oidn,
-    raw: &std::path::Path,
-    output: &std::path::Path,
+    (output, raw): (&std::path::Path, &std::path::Path),
     (scene, settings): (&Scene, &mcrt::render::RenderSettings),
     film: &Film,
     guides: Option<&mcrt::aov::Guides>,

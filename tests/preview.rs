@@ -26,6 +26,9 @@ impl Drop for Rendering {
 
 /// Starts `mcrt render` of the Cornell box at 64² with far more samples than the test waits
 /// for, with `--preview` on loopback, and reads the printed URL.
+// Every way out kills and waits for the child (Rendering's Drop; the panics above it);
+// clippy does not see through the Drop.
+#[allow(clippy::zombie_processes)]
 fn start(out: &std::path::Path, extra: &[&str]) -> Rendering {
     let mut child = Command::new(BIN)
         .arg("render")
@@ -58,18 +61,25 @@ fn start(out: &std::path::Path, extra: &[&str]) -> Rendering {
     let deadline = Instant::now() + Duration::from_secs(60);
     loop {
         let left = deadline.saturating_duration_since(Instant::now());
-        let line = rx
-            .recv_timeout(left)
-            .expect("mcrt printed no preview URL within 60 s");
+        let Ok(line) = rx.recv_timeout(left) else {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("mcrt printed no preview URL within 60 s");
+        };
         if let Some(url) = line.strip_prefix("preview: http://") {
-            let addr: SocketAddr = url.trim_end_matches('/').parse().expect(&line);
-            assert!(addr.ip().is_loopback(), "{addr} is not loopback");
-            assert_ne!(addr.port(), 0, "the chosen port is printed");
-            return Rendering {
+            let Ok(addr) = url.trim_end_matches('/').parse::<SocketAddr>() else {
+                let _ = child.kill();
+                let _ = child.wait();
+                panic!("not an address: {line}");
+            };
+            let r = Rendering {
                 child,
                 addr,
                 stderr: rx,
             };
+            assert!(addr.ip().is_loopback(), "{addr} is not loopback");
+            assert_ne!(addr.port(), 0, "the chosen port is printed");
+            return r;
         }
     }
 }
