@@ -44,7 +44,7 @@ enum Command {
     /// Trace the photon maps of the `photon` integrator and draw the stored photons over a
     /// dimmed direct-light render: global photons blue, caustic photons orange.
     Photons(PhotonsArgs),
-    /// Denoise an EXR rendered with `--aov albedo,normal` with Intel Open Image Denoise (its
+    /// Denoise an EXR rendered with `--aov albedo,normal,emission` with Intel Open Image Denoise (its
     /// RT filter, guided by the albedo and normal layers; see README, "Denoising").
     Denoise(DenoiseArgs),
 }
