@@ -10,13 +10,18 @@
 //!   albedo (glass: 1). Misses: 0.
 //! - `normal.X/Y/Z`: the world-space shading normal at that same surface, turned towards the
 //!   ray that reached it. Misses: (0, 0, 0), the null vector OIDN takes as "no surface".
+//! - `emission.R/G/B`: the radiance emitted towards the camera by the surface (or the
+//!   constant environment) each camera ray reaches first, as the path and direct integrators
+//!   add it on the ray's first segment (none with `hide_emitters` or `max_depth` 0). It has no
+//!   Monte Carlo noise but the pixel coverage, so [`crate::denoise`] keeps it out of the
+//!   denoiser.
 //! - `depth.Z`: the distance from the camera to the first surface hit (along the camera ray,
 //!   not the z-depth); the mean over the samples that hit, +∞ where none does.
 //! - `variance.R/G/B`: the estimated variance of each pixel's mean, s²/n
 //!   ([`Film::variance_of_mean`]).
 //! - `spp.Y`: the samples in each pixel's mean (with `--adaptive` they differ).
 //!
-//! Albedo, normal and depth are averaged over [`GUIDE_SPP`] camera rays per pixel: the first
+//! Albedo, normal, emission and depth are averaged over [`GUIDE_SPP`] camera rays per pixel: the first
 //! samples' own rays (same seed, pixel and sample index), traced only to the first
 //! non-specular hit. They do not depend on how long the render runs, so a partial image, an
 //! interrupted and a resumed render all carry the same guide layers.
@@ -40,15 +45,17 @@ pub const MAX_SPECULAR: u32 = 8;
 pub enum Aov {
     Albedo,
     Normal,
+    Emission,
     Depth,
     Variance,
     Spp,
 }
 
 impl Aov {
-    pub const ALL: [Aov; 5] = [
+    pub const ALL: [Aov; 6] = [
         Aov::Albedo,
         Aov::Normal,
+        Aov::Emission,
         Aov::Depth,
         Aov::Variance,
         Aov::Spp,
@@ -58,6 +65,7 @@ impl Aov {
         match self {
             Aov::Albedo => "albedo",
             Aov::Normal => "normal",
+            Aov::Emission => "emission",
             Aov::Depth => "depth",
             Aov::Variance => "variance",
             Aov::Spp => "spp",
@@ -77,7 +85,7 @@ impl Aov {
 
     /// Whether the layer needs the guide rays of [`render_guides`].
     pub fn needs_guides(&self) -> bool {
-        matches!(self, Aov::Albedo | Aov::Normal | Aov::Depth)
+        matches!(self, Aov::Albedo | Aov::Normal | Aov::Emission | Aov::Depth)
     }
 }
 
@@ -89,7 +97,9 @@ pub fn parse_list(text: &str) -> Result<Vec<Aov>, String> {
             .into_iter()
             .find(|a| a.name() == name)
             .ok_or_else(|| {
-                format!("unknown AOV '{name}' (known: albedo, normal, depth, variance, spp)")
+                format!(
+                    "unknown AOV '{name}' (known: albedo, normal, emission, depth, variance, spp)"
+                )
             })?;
         if out.contains(&aov) {
             return Err(format!("AOV '{name}' is given twice"));
@@ -99,19 +109,27 @@ pub fn parse_list(text: &str) -> Result<Vec<Aov>, String> {
     Ok(out)
 }
 
-/// Albedo, normal and depth per pixel of the film, row-major.
+/// Albedo, normal, emission and depth per pixel of the film, row-major.
 #[derive(Clone, Debug)]
 pub struct Guides {
     pub albedo: Vec<Color>,
     pub normal: Vec<Vec3A>,
+    pub emission: Vec<Color>,
+    /// Whether the guide rays of the pixel saw different emission (an emitter's edge).
+    pub emission_edge: Vec<bool>,
     pub depth: Vec<f32>,
 }
+
+/// One pixel's guides: albedo, normal, emission, whether the emission varied, depth.
+type GuidePixel = (Color, Vec3A, Color, bool, f32);
 
 /// Traces the guide rays ([`GUIDE_SPP`] per pixel) of the film window.
 pub fn render_guides(scene: &Scene, s: &RenderSettings) -> Result<Guides, RenderError> {
     let camera = camera_for(scene, s)?;
     let (ox, oy, fw, fh) = s.window();
-    let rows: Vec<Vec<(Color, Vec3A, f32)>> = with_threads(s, || {
+    // As the integrators see emitters on the first segment (path.rs, direct.rs).
+    let sees_emitters = !s.params.hide_emitters && s.params.max_depth != Some(0);
+    let rows: Vec<Vec<GuidePixel>> = with_threads(s, || {
         (0..fh)
             .into_par_iter()
             .map(|y| {
@@ -121,11 +139,21 @@ pub fn render_guides(scene: &Scene, s: &RenderSettings) -> Result<Guides, Render
                         let pixel = gy as u64 * s.width as u64 + gx as u64;
                         // Sums in f64: exact for the 16 values of a flat surface.
                         let (mut albedo, mut normal) = (glam::DVec3::ZERO, glam::DVec3::ZERO);
+                        let mut emission = glam::DVec3::ZERO;
+                        let (mut first_le, mut edge) = (None, false);
                         let (mut depth, mut hits) = (0.0f64, 0u32);
                         for i in 0..GUIDE_SPP {
                             let mut sampler =
                                 Sampler::for_sample(s.sampler, s.seed, pixel, i as u64);
                             let mut ray = camera.generate_ray(gx, gy, sampler.next_2d());
+                            let le = if sees_emitters {
+                                seen_emission(scene, &ray)
+                            } else {
+                                Color::ZERO
+                            };
+                            first_le.get_or_insert(le);
+                            edge |= first_le != Some(le);
+                            emission += le.as_dvec3();
                             let mut tint = Color::ONE;
                             for bounce in 0..=MAX_SPECULAR {
                                 let Some(si) = scene.intersect(&ray) else {
@@ -166,6 +194,8 @@ pub fn render_guides(scene: &Scene, s: &RenderSettings) -> Result<Guides, Render
                         (
                             (albedo * k).as_vec3(),
                             Vec3A::from((normal * k).as_vec3()),
+                            (emission * k).as_vec3(),
+                            edge,
                             d,
                         )
                     })
@@ -173,12 +203,103 @@ pub fn render_guides(scene: &Scene, s: &RenderSettings) -> Result<Guides, Render
             })
             .collect()
     })?;
-    let flat: Vec<(Color, Vec3A, f32)> = rows.into_iter().flatten().collect();
+    let flat: Vec<GuidePixel> = rows.into_iter().flatten().collect();
     Ok(Guides {
         albedo: flat.iter().map(|p| p.0).collect(),
         normal: flat.iter().map(|p| p.1).collect(),
-        depth: flat.iter().map(|p| p.2).collect(),
+        emission: flat.iter().map(|p| p.2).collect(),
+        emission_edge: flat.iter().map(|p| p.3).collect(),
+        depth: flat.iter().map(|p| p.4).collect(),
     })
+}
+
+/// The radiance emitted towards the camera by what `ray` (a camera ray) reaches first, as the
+/// path and direct integrators add it on the first segment (`emitted` and `escaped` with no
+/// previous vertex: no MIS weight).
+fn seen_emission(scene: &Scene, ray: &crate::geometry::Ray) -> Color {
+    match scene.intersect(ray) {
+        Some(si) if si.light != crate::scene::NO_LIGHT => scene.lights.le(si.light, si.ng, -ray.d),
+        Some(_) => Color::ZERO,
+        None => scene.lights.environment().map_or(Color::ZERO, |(le, _)| le),
+    }
+}
+
+/// Ray positions per pixel of the quadrature in [`emission_split`]: a Fibonacci lattice of
+/// F(14) = 377 points, with F(13) = 233 as its generator. Its points have distinct x and
+/// distinct y coordinates, so the covered fraction of a pixel crossed by an axis-aligned edge
+/// is found to within 1/377 (a 16 × 16 grid: only to 1/16), and edges of other slopes within
+/// O(log N / N) (the lattice's discrepancy; Niederreiter, "Random Number Generation and
+/// Quasi-Monte Carlo Methods", 1992, ch. 5).
+pub const EMISSION_POINTS: u32 = 377;
+const EMISSION_GENERATOR: u32 = 233;
+
+/// The directly seen emission of each pixel twice, for [`crate::denoise`]: (what the render's
+/// own samples added, the pixel's integral of it). Where the guide rays of the pixel and of its
+/// eight neighbours all saw the same emission (inside an emitter, or none), both are the guide
+/// value. On an emitter's edge (which may cross a pixel that all of its own guide rays missed
+/// or hit, so the neighbours are asked too), the
+/// first is the mean over the camera rays of the pixel's samples [0, count) (the same rays as
+/// the render's: same seed, pixel and index), the second the mean over a grid of
+/// [`EMISSION_POINTS`] ray positions in the pixel (the box filter the samples estimate), which
+/// has no coverage noise left. The cost is one primary ray per sample of edge pixels only.
+pub fn emission_split(
+    scene: &Scene,
+    s: &RenderSettings,
+    guides: &Guides,
+    film: &Film,
+) -> Result<(Vec<Color>, Vec<Color>), RenderError> {
+    let camera = camera_for(scene, s)?;
+    let (ox, oy, fw, fh) = s.window();
+    let edge = |i: usize| {
+        let (x, y) = ((i as u32 % fw) as i64, (i as u32 / fw) as i64);
+        let e = guides.emission[i];
+        guides.emission_edge[i]
+            || (-1..=1).any(|dy| {
+                (-1..=1).any(|dx| {
+                    let (xx, yy) = (x + dx, y + dy);
+                    xx >= 0
+                        && yy >= 0
+                        && xx < fw as i64
+                        && yy < fh as i64
+                        && guides.emission[(yy * fw as i64 + xx) as usize] != e
+                })
+            })
+    };
+    let sees_emitters = !s.params.hide_emitters && s.params.max_depth != Some(0);
+    let pairs: Vec<(Color, Color)> = with_threads(s, || {
+        (0..guides.emission.len())
+            .into_par_iter()
+            .map(|i| {
+                let e = guides.emission[i];
+                if !sees_emitters || !edge(i) {
+                    return (e, e);
+                }
+                let (gx, gy) = (i as u32 % fw + ox, i as u32 / fw + oy);
+                let pixel = gy as u64 * s.width as u64 + gx as u64;
+                let n = film.count[i];
+                let mut own = glam::DVec3::ZERO;
+                for k in 0..n {
+                    let mut sampler = Sampler::for_sample(s.sampler, s.seed, pixel, k as u64);
+                    let ray = camera.generate_ray(gx, gy, sampler.next_2d());
+                    own += seen_emission(scene, &ray).as_dvec3();
+                }
+                let m = EMISSION_POINTS;
+                let mut grid = glam::DVec3::ZERO;
+                for k in 0..m {
+                    let u = glam::Vec2::new(
+                        (k as f32 + 0.5) / m as f32,
+                        ((k * EMISSION_GENERATOR % m) as f32 + 0.5) / m as f32,
+                    );
+                    grid += seen_emission(scene, &camera.generate_ray(gx, gy, u)).as_dvec3();
+                }
+                (
+                    (own / n.max(1) as f64).as_vec3(),
+                    (grid / m as f64).as_vec3(),
+                )
+            })
+            .collect()
+    })?;
+    Ok(pairs.into_iter().unzip())
 }
 
 /// The extra channels for `aovs`: (name, one value per pixel). `guides` must be given when
@@ -198,6 +319,12 @@ pub fn channels(aovs: &[Aov], guides: Option<&Guides>, film: &Film) -> Vec<(Stri
                 for (c, ch) in ["X", "Y", "Z"].iter().enumerate() {
                     let v = guides().normal.iter().map(|p| p[c]).collect();
                     out.push((format!("normal.{ch}"), v));
+                }
+            }
+            Aov::Emission => {
+                for (c, ch) in ["R", "G", "B"].iter().enumerate() {
+                    let v = guides().emission.iter().map(|p| p[c]).collect();
+                    out.push((format!("emission.{ch}"), v));
                 }
             }
             Aov::Depth => out.push(("depth.Z".into(), guides().depth.clone())),

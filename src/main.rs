@@ -44,7 +44,7 @@ enum Command {
     /// Trace the photon maps of the `photon` integrator and draw the stored photons over a
     /// dimmed direct-light render: global photons blue, caustic photons orange.
     Photons(PhotonsArgs),
-    /// Denoise an EXR rendered with `--aov albedo,normal` with Intel Open Image Denoise (its
+    /// Denoise an EXR rendered with `--aov albedo,normal,emission` with Intel Open Image Denoise (its
     /// RT filter, guided by the albedo and normal layers; see README, "Denoising").
     Denoise(DenoiseArgs),
 }
@@ -264,8 +264,8 @@ struct RenderArgs {
     /// be larger).
     #[arg(long, value_name = "CHECKPOINT.exr")]
     resume: Option<PathBuf>,
-    /// Extra layers of the output EXR, comma-separated: albedo, normal, depth, variance, spp
-    /// (for denoisers; see README, "AOVs"). -o must be .exr.
+    /// Extra layers of the output EXR, comma-separated: albedo, normal, emission, depth,
+    /// variance, spp (for denoisers; see README, "AOVs"). -o must be .exr.
     #[arg(long, value_name = "LIST")]
     aov: Option<String>,
     /// No progress bar and no summary line.
@@ -620,9 +620,15 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
         let layers = mcrt::aov::channels(&aovs, guides.as_ref(), film);
         match &denoiser {
             None => write_image_with(&output, &film.image(), &opts, &layers)?,
-            Some((oidn, raw)) => {
-                write_denoised(oidn, raw, &output, film, guides.as_ref(), &opts, &layers)?
-            }
+            Some((oidn, raw)) => write_denoised(
+                oidn,
+                (&output, raw),
+                (&scene, &settings),
+                film,
+                guides.as_ref(),
+                &opts,
+                &layers,
+            )?,
         }
         Ok(())
     };
@@ -1036,22 +1042,19 @@ fn load_denoiser(
     Ok(Some((oidn, raw)))
 }
 
-/// Writes the raw image to `raw` and the denoised one to `output`, both with `layers`.
+/// Writes the denoised image to `output` and the raw one to `raw`, both with `layers`.
 fn write_denoised(
     oidn: &mcrt::denoise::Oidn,
-    raw: &std::path::Path,
-    output: &std::path::Path,
+    (output, raw): (&std::path::Path, &std::path::Path),
+    (scene, settings): (&Scene, &mcrt::render::RenderSettings),
     film: &Film,
     guides: Option<&mcrt::aov::Guides>,
     opts: &WriteOptions,
     layers: &[(String, Vec<f32>)],
 ) -> Result<(), Error> {
-    let image = film.image();
     let guides = guides.expect("--denoise renders the guides");
-    let clean = oidn
-        .denoise_guided(&image, guides)
-        .map_err(Error::Denoise)?;
-    write_image_with(raw, &image, opts, layers)?;
+    let clean = oidn.denoise_render(scene, settings, film, guides)?;
+    write_image_with(raw, &film.image(), opts, layers)?;
     write_image_with(output, &clean, opts, layers)?;
     Ok(())
 }
@@ -1068,8 +1071,8 @@ fn start_preview(a: &RenderArgs) -> Result<Option<mcrt::preview::Preview>, Error
 
 #[derive(clap::Args)]
 struct DenoiseArgs {
-    /// An EXR with channels R, G, B, albedo.R/G/B and normal.X/Y/Z (`mcrt render --aov
-    /// albedo,normal -o IN.exr`).
+    /// An EXR with channels R, G, B, albedo.R/G/B and normal.X/Y/Z, and optionally
+    /// emission.R/G/B (`mcrt render --aov albedo,normal,emission -o IN.exr`).
     input: PathBuf,
     /// The denoised image (.png or .exr).
     #[arg(short, long)]
@@ -1083,7 +1086,12 @@ fn denoise(a: DenoiseArgs) -> Result<(), Error> {
     let input = mcrt::denoise::read_guided_exr(&a.input).map_err(Error::Input)?;
     let oidn = mcrt::denoise::Oidn::load().map_err(Error::Usage)?;
     let clean = oidn
-        .denoise(&input.color, &input.albedo, &input.normal)
+        .denoise(
+            &input.color,
+            &input.albedo,
+            &input.normal,
+            input.emission.as_deref().map(|e| (e, e)),
+        )
         .map_err(Error::Denoise)?;
     write_image(&a.output, &clean, &a.image.options())?;
     Ok(())

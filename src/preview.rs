@@ -271,7 +271,9 @@ fn image_response(
     };
     let mut bytes = Vec::new();
     match encode(&image, &mut bytes) {
+        // With a Content-Length (not chunked), so that clients see the size.
         Ok(()) => Response::from_data(bytes)
+            .with_chunked_threshold(usize::MAX)
             .with_header(header("Content-Type", mime))
             .with_header(header("X-Mcrt-Pass", &pass.to_string())),
         Err(e) => text(500, &format!("cannot encode the image: {e}\n")),
