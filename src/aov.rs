@@ -76,7 +76,7 @@ impl Aov {
     /// them.
     pub fn channels(&self) -> &'static [&'static str] {
         match self {
-            Aov::Albedo | Aov::Variance => &["R", "G", "B"],
+            Aov::Albedo | Aov::Emission | Aov::Variance => &["R", "G", "B"],
             Aov::Normal => &["X", "Y", "Z"],
             Aov::Depth => &["Z"],
             Aov::Spp => &["Y"],
@@ -355,6 +355,8 @@ mod tests {
         let guides = Guides {
             albedo: vec![Color::ZERO; 2],
             normal: vec![Vec3A::ZERO; 2],
+            emission: vec![Color::ZERO; 2],
+            emission_edge: vec![false; 2],
             depth: vec![0.0; 2],
         };
         for aov in Aov::ALL {
