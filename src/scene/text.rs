@@ -30,3 +30,21 @@ impl<'a> Iterator for Fields<'a> {
         ))
     }
 }
+
+/// Why a number read as f64 does not fit the f32 every scene number becomes: beyond f32's
+/// range it would become infinite (and be refused as "not finite" or "not positive", which it
+/// was not), too small it would round to 0. None when it fits (or is not finite: the caller
+/// says what it expects then).
+pub fn f32_fault(v: f64) -> Option<String> {
+    if v.is_finite() && v.abs() > f32::MAX as f64 {
+        Some(format!(
+            "{v:e} is out of range: numbers are 32-bit floats, at most about 3.4e38"
+        ))
+    } else if v != 0.0 && v as f32 == 0.0 {
+        Some(format!(
+            "{v:e} is too small: numbers are 32-bit floats, and it would round to 0"
+        ))
+    } else {
+        None
+    }
+}

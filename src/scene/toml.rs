@@ -368,17 +368,10 @@ impl<'de> serde::de::Visitor<'de> for F32Range {
         f.write_str("any TOML value")
     }
     fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<F32Range, E> {
-        if v.is_finite() && v.abs() > f32::MAX as f64 {
-            return Err(E::custom(format!(
-                "{v:e} is out of range: numbers are 32-bit floats, at most about 3.4e38"
-            )));
+        match super::text::f32_fault(v) {
+            Some(f) => Err(E::custom(f)),
+            None => Ok(F32Range),
         }
-        if v != 0.0 && v as f32 == 0.0 {
-            return Err(E::custom(format!(
-                "{v:e} is too small: numbers are 32-bit floats, and it would round to 0"
-            )));
-        }
-        Ok(F32Range)
     }
     fn visit_i64<E>(self, _: i64) -> Result<F32Range, E> {
         Ok(F32Range)

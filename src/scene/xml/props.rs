@@ -223,6 +223,11 @@ impl<'a> Props<'a> {
             return Err(self.type_err(e, name, "a <float>"));
         }
         let v = self.value(e)?;
+        // Checked as f64, read as f32 (directly, without rounding twice).
+        let wide = v.trim().parse::<f64>().ok();
+        if let Some(f) = wide.and_then(crate::scene::text::f32_fault) {
+            return Err(self.doc.err_attr(e, "value", format!("'{name}': {f}")));
+        }
         v.trim()
             .parse::<f32>()
             .ok()
@@ -232,7 +237,10 @@ impl<'a> Props<'a> {
                 self.doc.err_attr(
                     e,
                     "value",
-                    format!("'{name}': expected a finite number, found '{v}'"),
+                    format!(
+                        "'{name}': expected a finite number, found '{}'",
+                        crate::input::shorten(v)
+                    ),
                 )
             })
     }
