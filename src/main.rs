@@ -365,7 +365,11 @@ fn main() {
         Ok(0) => {}
         Ok(code) => std::process::exit(code),
         Err(e) => {
-            eprintln!("error: {e}");
+            // User strings in the message (a name, a value) are cut short.
+            eprintln!(
+                "error: {}",
+                mcrt::scene::error::shorten_message(&e.to_string())
+            );
             std::process::exit(e.exit_code());
         }
     }
@@ -463,7 +467,7 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
     };
     let desc = mcrt::load_scene_with(&a.scene, &load)?;
     for w in &desc.warnings {
-        eprintln!("warning: {w}");
+        eprintln!("warning: {}", mcrt::scene::error::shorten_message(w));
     }
     let over = FileSettings {
         width: a.width,
