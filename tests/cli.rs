@@ -598,7 +598,7 @@ fn photon_maps_beyond_memory_are_refused() {
         "--integrator".as_ref(),
         "photon".as_ref(),
         "--photons".as_ref(),
-        "100000000000".as_ref(),
+        "1000000000".as_ref(),
     ]);
     let err = stderr_of(&o);
     assert_eq!(o.status.code(), Some(2), "{err}");
