@@ -382,7 +382,11 @@ fn main() {
         Ok(0) => {}
         Ok(code) => std::process::exit(code),
         Err(e) => {
-            eprintln!("error: {e}");
+            // User strings in the message (a name, a value) are cut short.
+            eprintln!(
+                "error: {}",
+                mcrt::scene::error::shorten_message(&e.to_string())
+            );
             std::process::exit(e.exit_code());
         }
     }
@@ -483,7 +487,7 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
     // Read once: the checkpoint's hash is of the bytes the scene was parsed from.
     let (desc, scene_bytes) = mcrt::load_scene_source(&a.scene, &load)?;
     for w in &desc.warnings {
-        eprintln!("warning: {w}");
+        eprintln!("warning: {}", mcrt::scene::error::shorten_message(w));
     }
     let over = FileSettings {
         width: a.width,

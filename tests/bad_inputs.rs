@@ -57,12 +57,10 @@ fn check(name: &str) {
         _ => input.clone(),
     };
     let out = dir.path().join("out.png");
-    let o = run(&[
-        "render".as_ref(),
-        scene.as_os_str(),
-        "-o".as_ref(),
-        out.as_os_str(),
-    ]);
+    let mut cmd = std::process::Command::new(BIN);
+    cmd.arg("render").arg(&scene).arg("-o").arg(&out);
+    limit_memory(&mut cmd);
+    let o = cmd.output().expect("cannot run the mcrt binary");
     let err = stderr_of(&o);
     assert!(!err.contains("panicked"), "{name}: mcrt panicked:\n{err}");
     assert_eq!(
@@ -83,6 +81,31 @@ fn check(name: &str) {
         o.stdout.is_empty(),
         "{name}: nothing goes to stdout on failure"
     );
+}
+
+/// Bad inputs run under a 4 GiB address-space limit: one that makes mcrt allocate without
+/// bound fails the test (out of memory) instead of the machine.
+fn limit_memory(cmd: &mut std::process::Command) {
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::unix::process::CommandExt;
+        // SAFETY: setrlimit is async-signal-safe; nothing else runs between fork and exec.
+        unsafe {
+            cmd.pre_exec(|| {
+                let cap = 4 << 30;
+                let lim = libc::rlimit {
+                    rlim_cur: cap,
+                    rlim_max: cap,
+                };
+                if libc::setrlimit(libc::RLIMIT_AS, &lim) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+                Ok(())
+            });
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = cmd;
 }
 
 macro_rules! bad_input {
@@ -244,3 +267,32 @@ fn every_corpus_file_is_tested() {
     }
     assert!(n >= 40, "only {n} bad inputs");
 }
+
+// Issue 27: bounds before work, checked arithmetic, messages.
+bad_input!(xml_crop_overflow_xml, "xml-crop-overflow.xml");
+bad_input!(xml_matrix_nan_xml, "xml-matrix-nan.xml");
+bad_input!(xml_default_expansion_xml, "xml-default-expansion.xml");
+bad_input!(
+    xml_emitter_samples_above_limit_xml,
+    "xml-emitter-samples-above-limit.xml"
+);
+bad_input!(
+    xml_max_depth_above_limit_xml,
+    "xml-max-depth-above-limit.xml"
+);
+bad_input!(
+    toml_shadow_rays_above_limit_toml,
+    "toml-shadow-rays-above-limit.toml"
+);
+bad_input!(
+    toml_rr_depth_above_limit_toml,
+    "toml-rr-depth-above-limit.toml"
+);
+bad_input!(
+    toml_max_depth_above_limit_toml,
+    "toml-max-depth-above-limit.toml"
+);
+bad_input!(
+    toml_rr_survival_one_minus_ulp_toml,
+    "toml-rr-survival-one-minus-ulp.toml"
+);

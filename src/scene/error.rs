@@ -13,10 +13,11 @@ pub struct SceneError {
 
 impl SceneError {
     pub fn new(path: &Path, location: Option<(usize, usize)>, message: impl Into<String>) -> Self {
+        let message = message.into();
         SceneError {
             path: path.to_path_buf(),
             location,
-            message: message.into(),
+            message: shorten_message(&message).into_owned(),
         }
     }
 
@@ -24,6 +25,71 @@ impl SceneError {
     pub fn at(path: &Path, text: &str, offset: usize, message: impl Into<String>) -> Self {
         Self::new(path, Some(line_col(text, offset)), message)
     }
+}
+
+/// Characters of a user's string that a message shows.
+pub const SHOWN: usize = 64;
+
+/// `s` for a message: whole if short, else its first [`SHOWN`] characters and how long it
+/// was, so a 50 MB name or value is not echoed in full.
+pub fn shorten(s: &str) -> std::borrow::Cow<'_, str> {
+    match s.char_indices().nth(SHOWN) {
+        None => std::borrow::Cow::Borrowed(s),
+        Some((end, _)) => {
+            std::borrow::Cow::Owned(format!("{}… ({} bytes in all)", &s[..end], s.len()))
+        }
+    }
+}
+
+/// Longest message kept whole, in bytes; a longer one keeps its start and its end.
+const MAX_MESSAGE: usize = 2000;
+/// Longest run of non-blank characters (a name, a value, a path) kept whole in a message.
+const MAX_WORD: usize = 200;
+
+/// A message with user strings cut short: every run of non-blank characters longer than
+/// `MAX_WORD` bytes is [`shorten`]ed, and a message still longer than `MAX_MESSAGE` keeps
+/// its first and last parts (what is wrong, and what was expected) around an ellipsis.
+pub fn shorten_message(msg: &str) -> std::borrow::Cow<'_, str> {
+    let long_word = msg.split_whitespace().any(|w| w.len() > MAX_WORD);
+    if !long_word && msg.len() <= MAX_MESSAGE {
+        return std::borrow::Cow::Borrowed(msg);
+    }
+    let mut out = String::with_capacity(msg.len().min(2 * MAX_MESSAGE));
+    let mut rest = msg;
+    while !rest.is_empty() {
+        let blank = rest
+            .find(|c: char| !c.is_whitespace())
+            .unwrap_or(rest.len());
+        out.push_str(&rest[..blank]);
+        rest = &rest[blank..];
+        let word = rest.find(char::is_whitespace).unwrap_or(rest.len());
+        if word > MAX_WORD {
+            out.push_str(&shorten(&rest[..word]));
+        } else {
+            out.push_str(&rest[..word]);
+        }
+        rest = &rest[word..];
+    }
+    if out.len() > MAX_MESSAGE {
+        let head = floor_boundary(&out, MAX_MESSAGE * 2 / 3);
+        let tail = ceil_boundary(&out, out.len() - MAX_MESSAGE / 3);
+        out = format!("{} … {}", &out[..head], &out[tail..]);
+    }
+    std::borrow::Cow::Owned(out)
+}
+
+fn floor_boundary(s: &str, mut i: usize) -> usize {
+    while !s.is_char_boundary(i) {
+        i -= 1;
+    }
+    i
+}
+
+fn ceil_boundary(s: &str, mut i: usize) -> usize {
+    while !s.is_char_boundary(i) {
+        i += 1;
+    }
+    i
 }
 
 /// 1-based line and column (in characters) of a byte offset.

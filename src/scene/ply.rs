@@ -264,7 +264,8 @@ fn parse_header(path: &Path, data: &[u8]) -> Result<Header, SceneError> {
                         format!("expected an element count, found '{n}'"),
                     )
                 })?;
-                if elements.iter().any(|e| e.name == name) && (name == "vertex" || name == "face") {
+                // Names first: a header of many other elements stays linear.
+                if (name == "vertex" || name == "face") && elements.iter().any(|e| e.name == name) {
                     return Err(err(line_no, 1, format!("more than one '{name}' element")));
                 }
                 elements.push(Element {

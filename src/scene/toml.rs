@@ -421,11 +421,13 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
         desc.settings = settings(&cx, r)?;
     }
 
+    // Names seen (a set: many cameras stay linear).
+    let mut camera_names = std::collections::HashSet::new();
     for cam in &file.camera {
         let c = cam.get_ref();
         let at = cam.span();
         let name = c.name.get_ref().clone();
-        if desc.cameras.iter().any(|(n, _)| *n == name) {
+        if !camera_names.insert(name.clone()) {
             return cx.err(
                 c.name.span(),
                 format!(

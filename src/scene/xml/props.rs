@@ -111,12 +111,14 @@ const PROPERTY_TAGS: &[&str] = &[
 impl<'a> Props<'a> {
     pub fn new(doc: &'a Document, ids: &Ids<'a>, owner: &'a Elem) -> Result<Props<'a>> {
         let mut props: Vec<Prop<'a>> = Vec::new();
+        // Names seen, so that an object of many properties is read in linear time.
+        let mut names = std::collections::HashSet::new();
         let mut objects = Vec::new();
         for c in &owner.children {
             let named = c.attr("name");
             match (c.tag.as_str(), named) {
                 (tag, Some(name)) if PROPERTY_TAGS.contains(&tag) => {
-                    if props.iter().any(|p| p.name == name) {
+                    if !names.insert(name) {
                         return Err(doc.err(c, format!("property '{name}' is given twice")));
                     }
                     props.push(Prop {

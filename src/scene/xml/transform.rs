@@ -49,6 +49,18 @@ pub fn parse_transform(doc: &Document, e: &Elem) -> Result<Mat4> {
                         Vec4::new(n[2], n[5], n[8], 0.0),
                         Vec4::W,
                     ),
+                    Some(n) if n.len() == 16 || n.len() == 9 => {
+                        let k = n.iter().position(|x| !x.is_finite()).unwrap_or(0);
+                        return Err(doc.err_attr(
+                            op,
+                            "value",
+                            format!(
+                                "<matrix> values must be finite numbers; number {} is {}",
+                                k + 1,
+                                n[k]
+                            ),
+                        ));
+                    }
                     _ => {
                         return Err(doc.err_attr(
                             op,
