@@ -177,6 +177,15 @@ def test_bad_names_raise_usage_errors():
         mcrt.render(CORNELL, spp=1, width=4, height=4, integrator="sppm", aovs="albedo")
 
 
+def test_time_budget_is_checked_as_the_flag():
+    for t in [0, -1.0, float("nan"), "0s", "5 parsecs"]:
+        with pytest.raises(mcrt.UsageError, match="duration"):
+            mcrt.render(CORNELL, width=4, height=4, time=t)
+    # A time budget with spp bounds the samples by both.
+    d = mcrt.render(CORNELL, width=4, height=4, spp=2, time="1m", aovs="spp")
+    assert np.all(d["spp"] == 2)
+
+
 def test_write_read_round_trip(tmp_path):
     rng = np.random.default_rng(1)
     img = (rng.random((5, 7, 3)) * 4).astype(np.float32)
@@ -245,6 +254,13 @@ def test_progress_callback():
     calls.clear()
     mcrt.render(CORNELL, width=8, height=8, time=0.2, progress=lambda d, t: calls.append(t))
     assert calls and all(t is None for t in calls)
+
+
+def test_progress_true_renders_with_or_without_tqdm():
+    a = mcrt.render(CORNELL, spp=1, width=8, height=8, seed=2, progress=True)
+    assert np.array_equal(a, mcrt.render(CORNELL, spp=1, width=8, height=8, seed=2))
+    with pytest.raises(mcrt.UsageError, match="progress"):
+        mcrt.render(CORNELL, spp=1, width=8, height=8, progress=3)
 
 
 def test_progress_exception_stops_the_render():
