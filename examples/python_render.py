@@ -1,16 +1,22 @@
 """Notebook-style tour of the Python module: render the Cornell box, look at it, measure its noise.
 
-Run from the repository root after `pip install .` (tqdm and matplotlib are used if installed):
+After `pip install .` at the repository root (tqdm and matplotlib are used if installed):
 
     python examples/python_render.py
+
+The images are written to the current directory.
 """
+
+import pathlib
 
 import numpy as np
 
 import mcrt
 
+SCENE = pathlib.Path(__file__).resolve().parent.parent / "scenes" / "cornell-box.toml"
+
 # Load once (the BVH is built here), render as often as needed.
-scene = mcrt.load("scenes/cornell-box.toml")
+scene = mcrt.load(SCENE)
 print(scene)
 
 # Two renders with different seeds: float32 arrays (height, width, 3), linear RGB, the same bits
