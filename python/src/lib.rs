@@ -11,13 +11,13 @@ use mcrt::aov::{self, Aov};
 use mcrt::film::Film;
 use mcrt::image::{Format, Image, ToneMap, WriteOptions};
 use mcrt::integrator::{IntegratorKind, PhotonParams};
-use mcrt::progressive::{Budget, Stop};
+use mcrt::progressive::Budget;
 use mcrt::render::RenderSettings;
 use mcrt::sampler::SamplerKind;
 use mcrt::scene::desc::FileSettings;
 use mcrt::session::Request;
 use pyo3::create_exception;
-use pyo3::exceptions::{PyException, PyKeyboardInterrupt, PyUserWarning};
+use pyo3::exceptions::{PyException, PyUserWarning};
 use pyo3::prelude::*;
 use pyo3::types::{PyByteArray, PyBytes, PyDict, PyString, PyTuple};
 use std::path::{Path, PathBuf};
@@ -190,17 +190,14 @@ fn load(
     load_scene(py, path, mcrt::LoadOptions { defines, lenient })
 }
 
-/// A duration from seconds (int or float) or text such as "90s", "10m", "250ms".
+/// A duration from seconds (int or float) or text such as "90s", "10m", "250ms", checked as
+/// the command's `--time` (a number is read as that many seconds).
 fn duration(v: &Bound<'_, PyAny>) -> PyResult<Duration> {
-    if let Ok(s) = v.cast::<PyString>() {
-        return mcrt::progressive::parse_duration(&s.to_string()).map_err(usage);
-    }
-    let secs: f64 = v.extract()?;
-    Duration::try_from_secs_f64(secs).map_err(|_| {
-        usage(format!(
-            "time must be a non-negative number of seconds, got {secs}"
-        ))
-    })
+    let text = match v.cast::<PyString>() {
+        Ok(s) => s.to_string(),
+        Err(_) => v.extract::<f64>()?.to_string(),
+    };
+    mcrt::progressive::parse_duration(&text).map_err(usage)
 }
 
 /// A list of AOV names from "albedo,normal" or ["albedo", "normal"].
@@ -283,11 +280,10 @@ struct Job {
     aovs: Vec<Aov>,
 }
 
-/// The rendered image and AOV channels, and whether the render was interrupted.
+/// The rendered image and AOV channels.
 struct Output {
     image: Image,
     layers: Vec<(String, Vec<f32>)>,
-    interrupted: bool,
 }
 
 impl Job {
@@ -302,7 +298,6 @@ impl Job {
             return Ok(Output {
                 image: film.image(),
                 layers: Vec::new(),
-                interrupted: false,
             });
         };
         let guides = if self.aovs.iter().any(|a| a.needs_guides()) {
@@ -313,7 +308,8 @@ impl Job {
         let (_, _, fw, fh) = s.window();
         let mut film = Film::new(fw, fh);
         let mut next = vec![0; fw as usize * fh as usize];
-        let outcome = mcrt::progressive::render_progressive::<mcrt::Error>(
+        // It stops early only when the caller set `cancel`, and then raises instead.
+        mcrt::progressive::render_progressive::<mcrt::Error>(
             scene,
             s,
             &mut film,
@@ -326,7 +322,6 @@ impl Job {
         Ok(Output {
             image: film.image(),
             layers: aov::channels(&self.aovs, guides.as_ref(), &film),
-            interrupted: outcome.stop == Stop::Interrupted,
         })
     }
 }
@@ -447,12 +442,7 @@ fn run_job(
         return Err(e);
     }
     closed?;
-    let out = result.map_err(|e| py_err(py, e))?;
-    if out.interrupted {
-        // Cancelled without a pending exception: a signal arrived as the render ended.
-        return Err(PyKeyboardInterrupt::new_err("render interrupted"));
-    }
-    Ok(out)
+    result.map_err(|e| py_err(py, e))
 }
 
 /// Renders a scene (a `Scene` from `load`, or a scene file's path) and returns the image as a
@@ -471,7 +461,9 @@ fn run_job(
 ///
 /// `progress` is a callable `f(done, total)` (samples; total None when unbounded), called
 /// about ten times a second from the calling thread, or True for a tqdm bar where tqdm is
-/// installed. Ctrl-C stops the render within a tile and raises KeyboardInterrupt.
+/// installed. Ctrl-C stops the render within a tile and raises KeyboardInterrupt (the photon
+/// integrators, which trace their maps and render in one go, stop only when done, as in the
+/// command).
 #[pyfunction]
 #[pyo3(signature = (scene, *, spp=None, width=None, height=None, seed=None, integrator=None, time=None, threads=None, sampler=None, max_depth=None, shadow_rays=None, camera=None, target_noise=None, adaptive=false, aovs=None, progress=None))]
 #[allow(clippy::too_many_arguments)]
@@ -536,13 +528,13 @@ fn render<'py>(
                 IntegratorKind::Sppm => settings.params.photon.iterations,
                 _ => settings.spp,
             };
-            (None, Some(npix * passes as u64))
+            (None, Some(npix.saturating_mul(passes as u64)))
         }
         _ => {
             let b =
                 mcrt::session::budget(&settings, spp.is_some(), time, target_noise, adaptive, None)
                     .map_err(|e| py_err(py, e))?;
-            let total = b.spp.map(|n| npix * n as u64);
+            let total = b.spp.map(|n| npix.saturating_mul(n as u64));
             (Some(b), total)
         }
     };
