@@ -73,7 +73,9 @@ fn py_err(py: Python<'_>, e: mcrt::Error) -> PyErr {
         }
         mcrt::Error::Usage(_) => UsageError::new_err(msg),
         mcrt::Error::Image(_) | mcrt::Error::Input(_) => ImageError::new_err(msg),
-        mcrt::Error::Render(_) | mcrt::Error::Parts(_) => RenderError::new_err(msg),
+        mcrt::Error::Render(_) | mcrt::Error::Parts(_) | mcrt::Error::Denoise(_) => {
+            RenderError::new_err(msg)
+        }
     }
 }
 
