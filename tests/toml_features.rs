@@ -279,7 +279,12 @@ fn toml_defaults_of_the_new_materials_and_lights() {
         format!("{:?}", mcrt::material::Bsdf::Plastic(plastic))
     );
     let (eta, k) = mcrt::material::conductor::conductor_ior("Au").unwrap();
-    let gold = mcrt::material::RoughConductor::new(0.1, 0.1, eta, k, mcrt::Color::ONE);
+    let gold = mcrt::material::RoughConductor::new(
+        mcrt::material::Microfacet::ggx(0.1, 0.1),
+        eta,
+        k,
+        mcrt::Color::ONE,
+    );
     assert_eq!(
         dbg[2],
         format!("{:?}", mcrt::material::Bsdf::RoughConductor(gold))
