@@ -71,6 +71,7 @@ fn lenient_renders_unknown_bsdfs_grey_and_says_so() {
         "scene.xml",
         &scene_xml(
             r#"<shape type="sphere"><bsdf type="hair"/></shape>
+            <shape type="sphere"><point name="center" value="1, 0, 0"/><bsdf type="roughconductor"/></shape>
             <emitter type="constant"/>"#,
         ),
     );
@@ -90,6 +91,8 @@ fn lenient_renders_unknown_bsdfs_grey_and_says_so() {
         err.contains("bsdf 'hair' replaced by grey diffuse"),
         "{err}"
     );
+    // Beckmann (the roughconductor's default) is rendered as such: no stand-in, no warning.
+    assert_eq!(err.matches("--lenient").count(), 1, "{err}");
     assert!(out.exists());
 }
 
