@@ -115,8 +115,7 @@ fn bsdfs(c: &mut Criterion) {
         (
             "roughconductor",
             Bsdf::RoughConductor(RoughConductor::new(
-                0.2,
-                0.2,
+                mcrt::material::Microfacet::ggx(0.2, 0.2),
                 Vec3::new(0.2, 0.9, 1.1),
                 Vec3::new(3.9, 2.4, 2.2),
                 Vec3::ONE,
@@ -124,7 +123,14 @@ fn bsdfs(c: &mut Criterion) {
         ),
         (
             "roughplastic",
-            Bsdf::RoughPlastic(RoughPlastic::new(0.2, 1.49, white, Vec3::ONE, false)),
+            Bsdf::RoughPlastic(RoughPlastic::new(
+                mcrt::material::MicrofacetType::Ggx,
+                0.2,
+                1.49,
+                white,
+                Vec3::ONE,
+                false,
+            )),
         ),
     ];
     let mut r = Pcg32::new(5, 1);

@@ -151,6 +151,7 @@ bad_input!(
 bad_input!(toml_missing_mesh_file_toml, "toml-missing-mesh-file.toml");
 bad_input!(toml_nan_albedo_toml, "toml-nan-albedo.toml");
 bad_input!(toml_negative_ior_toml, "toml-negative-ior.toml");
+bad_input!(toml_unknown_distribution_toml, "toml-unknown-distribution.toml");
 bad_input!(toml_negative_radius_toml, "toml-negative-radius.toml");
 bad_input!(toml_negative_width_toml, "toml-negative-width.toml");
 bad_input!(
@@ -217,7 +218,7 @@ bad_input!(toml_width_is_a_string_toml, "toml-width-is-a-string.toml");
 bad_input!(toml_zero_area_light_toml, "toml-zero-area-light.toml");
 bad_input!(toml_zero_spp_toml, "toml-zero-spp.toml");
 bad_input!(xml_absurd_resolution_xml, "xml-absurd-resolution.xml");
-bad_input!(xml_beckmann_default_xml, "xml-beckmann-default.xml");
+bad_input!(xml_unknown_distribution_xml, "xml-unknown-distribution.xml");
 bad_input!(xml_crop_outside_film_xml, "xml-crop-outside-film.xml");
 bad_input!(xml_duplicate_id_xml, "xml-duplicate-id.xml");
 bad_input!(xml_include_cycle_xml, "xml-include-cycle.xml");

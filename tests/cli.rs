@@ -202,13 +202,13 @@ fn alpha_not_positive() {
         "alpha-zero",
         "[material.metal]\ntype = \"roughconductor\"\nmaterial = \"Cu\"\nalpha = 0\n",
         loc("alpha = 0", "0"),
-        &["'alpha' (GGX roughness) must be a finite number > 0"],
+        &["'alpha' (microfacet roughness) must be a finite number > 0"],
     );
     bad_scene(
         "alpha-negative",
         "[material.glass]\ntype = \"roughdielectric\"\nalpha_u = 0.1\nalpha_v = -0.2\n",
         loc("alpha_v = -0.2", "-0.2"),
-        &["'alpha_v' (GGX roughness) must be a finite number > 0"],
+        &["'alpha_v' (microfacet roughness) must be a finite number > 0"],
     );
 }
 

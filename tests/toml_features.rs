@@ -279,7 +279,12 @@ fn toml_defaults_of_the_new_materials_and_lights() {
         format!("{:?}", mcrt::material::Bsdf::Plastic(plastic))
     );
     let (eta, k) = mcrt::material::conductor::conductor_ior("Au").unwrap();
-    let gold = mcrt::material::RoughConductor::new(0.1, 0.1, eta, k, mcrt::Color::ONE);
+    let gold = mcrt::material::RoughConductor::new(
+        mcrt::material::Microfacet::ggx(0.1, 0.1),
+        eta,
+        k,
+        mcrt::Color::ONE,
+    );
     assert_eq!(
         dbg[2],
         format!("{:?}", mcrt::material::Bsdf::RoughConductor(gold))
@@ -291,5 +296,43 @@ fn toml_defaults_of_the_new_materials_and_lights() {
     assert_eq!(
         format!("{:?}", d.lights),
         "[Constant { radiance: Vec3(0.5, 0.5, 0.5) }]"
+    );
+}
+
+/// `distribution` picks the microfacet distribution of the rough materials; GGX without it
+/// (mcrt's TOML default, unlike Mitsuba's XML).
+#[test]
+fn toml_microfacet_distribution() {
+    use mcrt::material::{Bsdf, MicrofacetType};
+    let d = parse(
+        "[material.a]\ntype = \"roughconductor\"\n\n\
+         [material.b]\ntype = \"roughconductor\"\ndistribution = \"beckmann\"\nalpha_u = 0.1\nalpha_v = 0.3\n\n\
+         [material.c]\ntype = \"roughdielectric\"\ndistribution = \"beckmann\"\n\n\
+         [material.d]\ntype = \"roughplastic\"\ndistribution = \"beckmann\"\nalpha = 0.2\n\n\
+         [material.e]\ntype = \"roughplastic\"\ndistribution = \"ggx\"\n",
+    );
+    let got: Vec<_> = d
+        .materials
+        .iter()
+        .map(|m| {
+            let distr = match m.bsdf {
+                Bsdf::RoughConductor(b) => b.distr,
+                Bsdf::RoughDielectric(b) => b.distr,
+                Bsdf::RoughPlastic(b) => b.distr,
+                other => panic!("not rough: {other:?}"),
+            };
+            (distr.kind, distr.alpha_u, distr.alpha_v)
+        })
+        .collect();
+    use MicrofacetType::{Beckmann, Ggx};
+    assert_eq!(
+        got,
+        [
+            (Ggx, 0.1, 0.1),
+            (Beckmann, 0.1, 0.3),
+            (Beckmann, 0.1, 0.1),
+            (Beckmann, 0.2, 0.2),
+            (Ggx, 0.1, 0.1),
+        ]
     );
 }

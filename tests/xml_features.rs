@@ -30,3 +30,9 @@ fn conductor_rough_and_thin_dielectric_and_plastic_bsdfs() {
 fn textures_meshes_and_includes() {
     feature_matches_mitsuba("textures", 256, 4096);
 }
+
+/// The rough BSDFs without `distribution`: Mitsuba's default, Beckmann.
+#[test]
+fn beckmann_rough_bsdfs_by_default() {
+    feature_matches_mitsuba("beckmann", 512, 4096);
+}

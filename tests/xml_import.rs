@@ -71,6 +71,7 @@ fn lenient_renders_unknown_bsdfs_grey_and_says_so() {
         "scene.xml",
         &scene_xml(
             r#"<shape type="sphere"><bsdf type="hair"/></shape>
+            <shape type="sphere"><point name="center" value="1, 0, 0"/><bsdf type="roughconductor"/></shape>
             <emitter type="constant"/>"#,
         ),
     );
@@ -90,6 +91,8 @@ fn lenient_renders_unknown_bsdfs_grey_and_says_so() {
         err.contains("bsdf 'hair' replaced by grey diffuse"),
         "{err}"
     );
+    // Beckmann (the roughconductor's default) is rendered as such: no stand-in, no warning.
+    assert_eq!(err.matches("--lenient").count(), 1, "{err}");
     assert!(out.exists());
 }
 
@@ -302,4 +305,61 @@ fn crop_window_equals_the_full_image_there() {
             assert_eq!(b.get(x, y), a.get(x + 2, y + 3), "pixel ({x}, {y})");
         }
     }
+}
+
+/// The microfacet distribution of each rough BSDF of `body`, in order.
+fn distributions(tag: &str, body: &str) -> Vec<(mcrt::material::MicrofacetType, f32, f32)> {
+    use mcrt::material::Bsdf;
+    let dir = TempDir::new(tag);
+    let scene = dir.write("scene.xml", &scene_xml(body));
+    let d = load_with(&scene, &[]).unwrap();
+    d.materials
+        .iter()
+        .map(|m| {
+            let distr = match m.bsdf {
+                Bsdf::RoughConductor(b) => b.distr,
+                Bsdf::RoughDielectric(b) => b.distr,
+                Bsdf::RoughPlastic(b) => b.distr,
+                other => panic!("not rough: {other:?}"),
+            };
+            (distr.kind, distr.alpha_u, distr.alpha_v)
+        })
+        .collect()
+}
+
+/// As in Mitsuba, rough BSDFs without `distribution` are Beckmann; `ggx` and `beckmann` are
+/// accepted in any case, with `alpha` or `alpha_u` and `alpha_v`.
+#[test]
+fn rough_bsdfs_default_to_beckmann() {
+    use mcrt::material::MicrofacetType::{Beckmann, Ggx};
+    let got = distributions(
+        "xml-beckmann",
+        r#"<shape type="sphere"><bsdf type="roughconductor"/></shape>
+        <shape type="sphere"><bsdf type="roughdielectric"><float name="alpha" value="0.3"/></bsdf></shape>
+        <shape type="sphere"><bsdf type="roughplastic"><float name="alpha" value="0.2"/></bsdf></shape>
+        <shape type="sphere"><bsdf type="roughconductor"><string name="distribution" value="GGX"/></bsdf></shape>
+        <shape type="sphere"><bsdf type="roughdielectric"><string name="distribution" value="beckmann"/>
+            <float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.4"/></bsdf></shape>"#,
+    );
+    assert_eq!(
+        got,
+        vec![
+            (Beckmann, 0.1, 0.1),
+            (Beckmann, 0.3, 0.3),
+            (Beckmann, 0.2, 0.2),
+            (Ggx, 0.1, 0.1),
+            (Beckmann, 0.1, 0.4),
+        ]
+    );
+}
+
+#[test]
+fn unknown_distribution_is_an_error_at_its_value() {
+    bad_xml(
+        "xml-distribution",
+        r#"<shape type="sphere"><bsdf type="roughplastic"><string name="distribution" value="phong"/></bsdf></shape>"#,
+        "<string name=\"distribution\" value=\"phong\"/>",
+        "phong",
+        &["distribution 'phong': expected beckmann or ggx"],
+    );
 }

@@ -1,7 +1,8 @@
 """Reference values of Mitsuba 3's BSDFs for tests/bsdf_mitsuba.rs.
 
 Evaluates eval() and pdf() of Mitsuba's conductor, roughconductor, roughdielectric,
-thindielectric, plastic and roughplastic plugins (scalar_rgb variant, GGX) at fixed
+thindielectric, plastic and roughplastic plugins (scalar_rgb variant; GGX, then the
+Beckmann cases, named bk_*, with Mitsuba's default distribution) at fixed
 direction pairs in the local frame and writes tests/data/bsdf_mitsuba.txt. Each line:
 
     case wo.x wo.y wo.z wi.x wi.y wi.z mode f_cos.r f_cos.g f_cos.b pdf
@@ -50,6 +51,23 @@ DELTA = {
     "pl_lin": CASES["pl_lin"],
     "pl_nonlin": CASES["pl_nonlin"],
 }
+# Beckmann: no "distribution", Mitsuba's default. Evaluated after the cases above, from the
+# same random stream, so that adding them left the earlier lines unchanged.
+BECKMANN = {
+    "bk_rc_au_01": {"type": "roughconductor", "alpha": 0.1, "material": "Au"},
+    "bk_rc_cu_04": {"type": "roughconductor", "alpha": 0.4, "material": "Cu"},
+    "bk_rc_none_aniso": {"type": "roughconductor", "alpha_u": 0.05, "alpha_v": 0.3},
+    "bk_rc_al_aniso": {"type": "roughconductor", "alpha_u": 0.3, "alpha_v": 0.1,
+                       "material": "Al"},
+    "bk_rd_15_02": {"type": "roughdielectric", "alpha": 0.2, "int_ior": 1.5, "ext_ior": 1.0},
+    "bk_rd_133_aniso": {"type": "roughdielectric", "alpha_u": 0.1, "alpha_v": 0.4,
+                        "int_ior": 1.33, "ext_ior": 1.0},
+    "bk_rp_01": {"type": "roughplastic", "alpha": 0.1, "int_ior": 1.5, "ext_ior": 1.0,
+                 "diffuse_reflectance": {"type": "rgb", "value": [0.5, 0.2, 0.1]}},
+    "bk_rp_04_nonlin": {"type": "roughplastic", "alpha": 0.4, "int_ior": 1.6, "ext_ior": 1.0,
+                        "nonlinear": True,
+                        "diffuse_reflectance": {"type": "rgb", "value": [0.8, 0.6, 0.1]}},
+}
 
 
 def rand_dir(rng, upper):
@@ -59,9 +77,8 @@ def rand_dir(rng, upper):
     return [r * math.cos(phi), r * math.sin(phi), z if upper else -z]
 
 
-def main():
-    rng = random.Random(7)
-    for name, d in CASES.items():
+def non_delta(rng, cases):
+    for name, d in cases.items():
         bsdf = mi.load_dict(d)
         two_sided = d["type"] == "roughdielectric"
         n = 0
@@ -83,6 +100,11 @@ def main():
                 print(name, " ".join(f"{v:.9g}" for v in vals), tag,
                       " ".join(f"{float(v):.9g}" for v in (f[0], f[1], f[2], p)))
             n += 1
+
+
+def main():
+    rng = random.Random(7)
+    non_delta(rng, CASES)
     for name, d in DELTA.items():
         bsdf = mi.load_dict(d)
         for _ in range(20):
@@ -97,6 +119,7 @@ def main():
             vals = [*wo, bs.wo[0], bs.wo[1], bs.wo[2]]
             print("delta_" + name, " ".join(f"{v:.9g}" for v in vals), "R",
                   " ".join(f"{float(v):.9g}" for v in (w[0], w[1], w[2], bs.pdf)))
+    non_delta(rng, BECKMANN)
 
 
 if __name__ == "__main__":

@@ -1,41 +1,92 @@
-//! The GGX (Trowbridge–Reitz) microfacet distribution, anisotropic, with Smith's separable
-//! shadowing–masking and visible-normal sampling; the conventions are those of Mitsuba 3's
-//! `MicrofacetDistribution` (include/mitsuba/render/microfacet.h), which the rough BSDFs
-//! must match.
+//! Microfacet distributions, Beckmann and GGX (Trowbridge–Reitz), anisotropic, with Smith's
+//! separable shadowing–masking and visible-normal sampling. The conventions are those of
+//! Mitsuba 3's `MicrofacetDistribution` (include/mitsuba/render/microfacet.h), which the
+//! rough BSDFs must match; one type serves both distributions, so the BSDFs have one code
+//! path.
 //!
-//! - D(m) = 1 / (π αu αv (m_x²/αu² + m_y²/αv² + m_z²)²) (Trowbridge and Reitz 1975; Walter
-//!   et al., "Microfacet Models for Refraction through Rough Surfaces", EGSR 2007, eq. 33;
-//!   the anisotropic form is Heitz, "Understanding the Masking-Shadowing Function in
-//!   Microfacet-Based BRDFs", JCGT 3(2), 2014, eq. 85).
-//! - Λ(v) = (−1 + √(1 + (αu² v_x² + αv² v_y²)/v_z²))/2 and G1(v, m) = 1/(1 + Λ(v)) =
-//!   2/(1 + √(1 + tan²θ α²)) (Heitz 2014, eqs. 86 and 43), zero when v sees the back of the
-//!   microfacet (χ⁺(v·m / v·n)).
+//! - D(m): Beckmann, exp(−(m_x²/αu² + m_y²/αv²)/cos²θm) / (π αu αv cos⁴θm) (Beckmann and
+//!   Spizzichino 1963; Walter et al., "Microfacet Models for Refraction through Rough
+//!   Surfaces", EGSR 2007, eq. 25); GGX, 1 / (π αu αv (m_x²/αu² + m_y²/αv² + m_z²)²)
+//!   (Trowbridge and Reitz 1975; Walter et al. 2007, eq. 33). The anisotropic forms are
+//!   Heitz, "Understanding the Masking-Shadowing Function in Microfacet-Based BRDFs", JCGT
+//!   3(2), 2014, eqs. 82 and 85.
+//! - Λ(v), with a = 1/(α tan θ) and α the roughness projected on v's azimuth: Beckmann,
+//!   (erf(a) − 1)/2 + exp(−a²)/(2a√π) (Heitz 2014, eq. 83); GGX, (−1 + √(1 + 1/a²))/2
+//!   (eq. 86).
+//! - G1(v, m) = 1/(1 + Λ(v)), zero when v sees the back of the microfacet (χ⁺(v·m / v·n)).
+//!   For Beckmann, like Mitsuba, the rational approximation of Walter et al. 2007, eq. 27
+//!   (< 0.35 % relative error; 1 for a ≥ 1.6); for GGX the exact 2/(1 + √(1 + 1/a²)).
 //! - G(wo, wi, m) = G1(wo, m)·G1(wi, m): the separable form, as in Mitsuba (Walter et al.
 //!   2007, eq. 23), not the height-correlated one.
-//! - Visible normals D_wo(m) = G1(wo, m)·|wo·m|·D(m)/cos θo are sampled with Heitz, "Sampling
-//!   the GGX Distribution of Visible Normals", JCGT 7(4), 2018, using the concentric disk
-//!   map for the disk sample (the paper allows any area-preserving map; it is the one
-//!   Mitsuba's `sample_visible_11` uses, so that quadratures over the warped square, like
-//!   the rough plastic's transmittance table, see the same nodes).
+//! - Visible normals D_wo(m) = G1(wo, m)·|wo·m|·D(m)/cos θo (Heitz and d'Eon, "Importance
+//!   Sampling Microfacet-Based BSDFs using the Distribution of Visible Normals", EGSR 2014)
+//!   are sampled by stretching wo to the configuration α = 1, sampling the slopes visible
+//!   from it, and unstretching. GGX: Heitz, "Sampling the GGX Distribution of Visible
+//!   Normals", JCGT 7(4), 2018, with the concentric disk map (the paper allows any
+//!   area-preserving map; it is the one Mitsuba's `sample_visible_11` uses, so that
+//!   quadratures over the warped square, like the rough plastic's transmittance table, see
+//!   the same nodes). Beckmann: Jakob, "An Improved Visible Normal Sampling Routine for the
+//!   Beckmann Distribution" (2014), a Newton inversion of the slope CDF in the erf domain
+//!   that is continuous in the sample, as Mitsuba's `sample_visible_11`.
 
 use super::sampling::square_to_disk_concentric;
 use glam::{Vec2, Vec3A};
 use std::f32::consts::PI;
 
+/// Which normal distribution (Mitsuba's `distribution` parameter).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MicrofacetType {
+    /// Gaussian random surfaces; Mitsuba's default.
+    Beckmann,
+    /// Trowbridge–Reitz, long-tailed.
+    Ggx,
+}
+
+impl MicrofacetType {
+    /// `beckmann` or `ggx`, in any case (as Mitsuba, which lowercases the value).
+    pub fn parse(s: &str) -> Option<Self> {
+        match s.to_ascii_lowercase().as_str() {
+            "beckmann" => Some(MicrofacetType::Beckmann),
+            "ggx" => Some(MicrofacetType::Ggx),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            MicrofacetType::Beckmann => "beckmann",
+            MicrofacetType::Ggx => "ggx",
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Ggx {
+pub struct Microfacet {
+    pub kind: MicrofacetType,
     /// Roughness along the tangent (x) and bitangent (y) of the shading frame.
     pub alpha_u: f32,
     pub alpha_v: f32,
 }
 
-impl Ggx {
+/// 1/√π.
+const INV_SQRT_PI: f32 = 0.564_189_6;
+
+impl Microfacet {
     /// Roughness below 1e-4 is clamped to 1e-4, as in Mitsuba (`configure()`).
-    pub fn new(alpha_u: f32, alpha_v: f32) -> Self {
-        Ggx {
+    pub fn new(kind: MicrofacetType, alpha_u: f32, alpha_v: f32) -> Self {
+        Microfacet {
+            kind,
             alpha_u: alpha_u.max(1e-4),
             alpha_v: alpha_v.max(1e-4),
         }
+    }
+
+    pub fn ggx(alpha_u: f32, alpha_v: f32) -> Self {
+        Self::new(MicrofacetType::Ggx, alpha_u, alpha_v)
+    }
+
+    pub fn beckmann(alpha_u: f32, alpha_v: f32) -> Self {
+        Self::new(MicrofacetType::Beckmann, alpha_u, alpha_v)
     }
 
     /// The normal distribution D(m) (zero for m below the surface; like Mitsuba, values with
@@ -43,8 +94,18 @@ impl Ggx {
     #[inline]
     pub fn d(&self, m: Vec3A) -> f32 {
         let (au, av) = (self.alpha_u, self.alpha_v);
-        let t = (m.x / au) * (m.x / au) + (m.y / av) * (m.y / av) + m.z * m.z;
-        let d = 1.0 / (PI * au * av * t * t);
+        let xy = (m.x / au) * (m.x / au) + (m.y / av) * (m.y / av);
+        let d = match self.kind {
+            MicrofacetType::Beckmann => {
+                let c2 = m.z * m.z;
+                (-xy / c2).exp() / (PI * au * av * c2 * c2)
+            }
+            MicrofacetType::Ggx => {
+                let t = xy + m.z * m.z;
+                1.0 / (PI * au * av * t * t)
+            }
+        };
+        // NaN (m in the plane) fails the comparison too.
         if d * m.z > 1e-20 {
             d
         } else {
@@ -52,28 +113,56 @@ impl Ggx {
         }
     }
 
-    /// Smith's Λ(v) for GGX.
+    /// (α tan θ)² of v, α projected on v's azimuth; zero at normal incidence.
     #[inline]
-    pub fn lambda(&self, v: Vec3A) -> f32 {
+    fn tan_alpha2(&self, v: Vec3A) -> f32 {
         let xy = (self.alpha_u * v.x).powi(2) + (self.alpha_v * v.y).powi(2);
         if xy == 0.0 {
-            return 0.0;
+            0.0
+        } else {
+            xy / (v.z * v.z)
         }
-        0.5 * (-1.0 + (1.0 + xy / (v.z * v.z)).sqrt())
     }
 
-    /// Smith's masking G1(v, m) = 1/(1 + Λ(v)), zero when v and the macro-normal disagree
+    /// Smith's Λ(v), exact (for Beckmann, `g1` uses Walter's approximation of 1/(1 + Λ)).
+    #[inline]
+    pub fn lambda(&self, v: Vec3A) -> f32 {
+        let t2 = self.tan_alpha2(v);
+        if t2 == 0.0 {
+            return 0.0;
+        }
+        match self.kind {
+            MicrofacetType::Beckmann => {
+                let a = (1.0 / t2).sqrt() as f64;
+                (0.5 * (erf(a) - 1.0) + (-a * a).exp() / (2.0 * a * std::f64::consts::PI.sqrt()))
+                    as f32
+            }
+            MicrofacetType::Ggx => 0.5 * (-1.0 + (1.0 + t2).sqrt()),
+        }
+    }
+
+    /// Smith's masking G1(v, m) ≈ 1/(1 + Λ(v)), zero when v and the macro-normal disagree
     /// about the side of m (Mitsuba's `smith_g1`).
     #[inline]
     pub fn g1(&self, v: Vec3A, m: Vec3A) -> f32 {
         if v.dot(m) * v.z <= 0.0 {
             return 0.0;
         }
-        let xy = (self.alpha_u * v.x).powi(2) + (self.alpha_v * v.y).powi(2);
-        if xy == 0.0 {
+        let t2 = self.tan_alpha2(v);
+        if t2 == 0.0 {
             return 1.0;
         }
-        2.0 / (1.0 + (1.0 + xy / (v.z * v.z)).sqrt())
+        match self.kind {
+            MicrofacetType::Beckmann => {
+                let a = (1.0 / t2).sqrt();
+                if a >= 1.6 {
+                    1.0
+                } else {
+                    (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a)
+                }
+            }
+            MicrofacetType::Ggx => 2.0 / (1.0 + (1.0 + t2).sqrt()),
+        }
     }
 
     /// The separable shadowing–masking G1(wo, m)·G1(wi, m).
@@ -83,9 +172,18 @@ impl Ggx {
     }
 
     /// Samples a microfacet normal from the distribution of normals visible from `wo`
-    /// (`wo.z > 0`; Heitz 2018, listing 1).
+    /// (`wo.z > 0`).
     #[inline]
     pub fn sample_visible(&self, wo: Vec3A, u: Vec2) -> Vec3A {
+        match self.kind {
+            MicrofacetType::Ggx => self.sample_visible_ggx(wo, u),
+            MicrofacetType::Beckmann => self.sample_visible_beckmann(wo, u),
+        }
+    }
+
+    /// Heitz 2018, listing 1.
+    #[inline]
+    fn sample_visible_ggx(&self, wo: Vec3A, u: Vec2) -> Vec3A {
         // Stretch wo to the configuration with α = 1 (the hemisphere).
         let vh = Vec3A::new(self.alpha_u * wo.x, self.alpha_v * wo.y, wo.z).normalize();
         // An orthonormal basis around vh (T1 is perpendicular to the plane of incidence).
@@ -107,8 +205,27 @@ impl Ggx {
         Vec3A::new(self.alpha_u * nh.x, self.alpha_v * nh.y, nh.z.max(0.0)).normalize()
     }
 
+    /// Heitz and d'Eon 2014 (stretch, sample slopes for α = 1, rotate, unstretch) with
+    /// Jakob's slope sampler; Mitsuba's `sample` with `sample_visible`.
+    #[inline]
+    fn sample_visible_beckmann(&self, wo: Vec3A, u: Vec2) -> Vec3A {
+        let w = Vec3A::new(self.alpha_u * wo.x, self.alpha_v * wo.y, wo.z).normalize();
+        // The azimuth of the stretched direction (Mitsuba's `Frame3f::sincos_phi`).
+        let s2 = w.x * w.x + w.y * w.y;
+        let (sin_phi, cos_phi) = if s2 <= 4.0 * f32::EPSILON / 2.0 {
+            (0.0, 1.0)
+        } else {
+            let inv = 1.0 / s2.sqrt();
+            ((w.y * inv).clamp(-1.0, 1.0), (w.x * inv).clamp(-1.0, 1.0))
+        };
+        let s = beckmann_slopes_11(w.z, u);
+        let sx = (cos_phi * s.x - sin_phi * s.y) * self.alpha_u;
+        let sy = (sin_phi * s.x + cos_phi * s.y) * self.alpha_v;
+        Vec3A::new(-sx, -sy, 1.0).normalize()
+    }
+
     /// Density of `sample_visible` over microfacet normals: D_wo(m) = G1(wo, m)·|wo·m|·D(m)
-    /// / cos θo (Heitz 2018, eq. 1).
+    /// / cos θo (Heitz and d'Eon 2014, eq. 2).
     #[inline]
     pub fn pdf_visible(&self, wo: Vec3A, m: Vec3A) -> f32 {
         if wo.z <= 0.0 {
@@ -116,6 +233,134 @@ impl Ggx {
         }
         self.d(m) * self.g1(wo, m) * wo.dot(m).abs() / wo.z
     }
+}
+
+/// The slopes of a Beckmann surface of α = 1 visible from a direction at cos θ = `cos_theta`
+/// in the xz-plane (Jakob 2014): the x slope inverts its CDF, 1 + x + tan θ·exp(−erfinv(x)²)/√π
+/// over its maximum, in the erf domain x = erf(slope) by three Newton steps from the exact
+/// solution for θ = π/2; the y slope is Gaussian, independent. Mitsuba's `sample_visible_11`.
+fn beckmann_slopes_11(cos_theta: f32, u: Vec2) -> Vec2 {
+    let tan_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt() / cos_theta;
+    let cot_theta = 1.0 / tan_theta;
+    // The search interval [−1, maxval] in the erf domain.
+    let maxval = erf(cot_theta as f64) as f32;
+    let u = u.clamp(Vec2::splat(1e-6), Vec2::splat(1.0 - 1e-6));
+    let mut x = maxval - (maxval + 1.0) * erf((-u.x.ln()).sqrt() as f64) as f32;
+    // Normalisation of the CDF.
+    let target = u.x * (1.0 + maxval + INV_SQRT_PI * tan_theta * (-cot_theta * cot_theta).exp());
+    for _ in 0..3 {
+        let slope = erfinv(x);
+        let value = 1.0 + x + INV_SQRT_PI * tan_theta * (-slope * slope).exp() - target;
+        let derivative = 1.0 - slope * tan_theta;
+        x -= value / derivative;
+    }
+    Vec2::new(erfinv(x), erfinv(2.0 * u.y - 1.0))
+}
+
+/// The error function, to double precision (the complementary function by the Chebyshev
+/// fit of Numerical Recipes 3rd ed. §6.2.2, `Erf::erfccheb`).
+pub fn erf(x: f64) -> f64 {
+    if x >= 0.0 {
+        1.0 - erfc_cheb(x)
+    } else {
+        erfc_cheb(-x) - 1.0
+    }
+}
+
+fn erfc_cheb(z: f64) -> f64 {
+    const COF: [f64; 28] = [
+        -1.3026537197817094,
+        6.419697923564902e-1,
+        1.9476473204185836e-2,
+        -9.56151478680863e-3,
+        -9.46595344482036e-4,
+        3.66839497852761e-4,
+        4.2523324806907e-5,
+        -2.0278578112534e-5,
+        -1.624290004647e-6,
+        1.303655835580e-6,
+        1.5626441722e-8,
+        -8.5238095915e-8,
+        6.529054439e-9,
+        5.059343495e-9,
+        -9.91364156e-10,
+        -2.27365122e-10,
+        9.6467911e-11,
+        2.394038e-12,
+        -6.886027e-12,
+        8.94487e-13,
+        3.13092e-13,
+        -1.12708e-13,
+        3.81e-16,
+        7.106e-15,
+        -1.523e-15,
+        -9.4e-17,
+        1.21e-16,
+        -2.8e-17,
+    ];
+    if z.is_infinite() {
+        return 0.0;
+    }
+    let t = 2.0 / (2.0 + z);
+    let ty = 4.0 * t - 2.0;
+    let (mut d, mut dd) = (0.0, 0.0);
+    for &c in COF[1..].iter().rev() {
+        let tmp = d;
+        d = ty * d - dd + c;
+        dd = tmp;
+    }
+    t * (-z * z + 0.5 * (COF[0] + ty * d) - dd).exp()
+}
+
+/// The inverse error function on (−1, 1): Giles, "Approximating the erfinv function", GPU
+/// Computing Gems Jade Edition, 2011 (the single-precision polynomials, relative error
+/// < 4e-7 in f32 terms), evaluated in f64, then one Newton step on erf to double precision.
+pub fn erfinv(x: f32) -> f32 {
+    let x = x as f64;
+    if x <= -1.0 {
+        return f32::NEG_INFINITY;
+    }
+    if x >= 1.0 {
+        return f32::INFINITY;
+    }
+    let mut w = -((1.0 - x) * (1.0 + x)).ln();
+    let p = if w < 5.0 {
+        w -= 2.5;
+        let mut p = 2.810_226_36e-08;
+        for c in [
+            3.432_739_39e-07,
+            -3.523_387_7e-06,
+            -4.391_506_54e-06,
+            0.000_218_580_87,
+            -0.001_253_725_03,
+            -0.004_177_681_64,
+            0.246_640_727,
+            1.501_409_41,
+        ] {
+            p = c + p * w;
+        }
+        p
+    } else {
+        w = w.sqrt() - 3.0;
+        let mut p = -0.000_200_214_257;
+        for c in [
+            0.000_100_950_558,
+            0.001_349_343_22,
+            -0.003_673_428_44,
+            0.005_739_507_73,
+            -0.007_622_461_3,
+            0.009_438_870_47,
+            1.001_674_06,
+            2.832_976_82,
+        ] {
+            p = c + p * w;
+        }
+        p
+    };
+    let y = p * x;
+    // Newton: d erf(y)/dy = 2/√π exp(−y²).
+    let y = y - (erf(y) - x) / (2.0 / std::f64::consts::PI.sqrt() * (-y * y).exp());
+    y as f32
 }
 
 /// Reflects `wo` about the microfacet normal `m`.

@@ -20,7 +20,7 @@ pub mod thin_dielectric;
 pub use conductor::{conductor_ior, Conductor};
 pub use dielectric::Dielectric;
 pub use lambert::Lambert;
-pub use microfacet::Ggx;
+pub use microfacet::{Microfacet, MicrofacetType};
 pub use mirror::Mirror;
 pub use oren_nayar::OrenNayar;
 pub use plastic::Plastic;

@@ -1,33 +1,26 @@
-//! Rough conductors: the Cook–Torrance microfacet BRDF with the GGX distribution,
+//! Rough conductors: the Cook–Torrance microfacet BRDF (Beckmann or GGX distribution),
 //! f = F(wo·h)·D(h)·G(wo, wi, h) / (4 cos θo cos θi) (Walter et al., "Microfacet Models for
 //! Refraction through Rough Surfaces", EGSR 2007, eq. 20), complex Fresnel, sampled by
-//! visible normals; as Mitsuba 3's `roughconductor` with `distribution = "ggx"` and
-//! `sample_visible = true`.
+//! visible normals; as Mitsuba 3's `roughconductor` with `sample_visible = true`.
 
 use super::conductor::fresnel_conductor_rgb;
-use super::microfacet::{reflect_about, Ggx};
+use super::microfacet::{reflect_about, Microfacet};
 use super::BsdfSample;
 use crate::Color;
 use glam::{Vec2, Vec3A};
 
 #[derive(Clone, Copy, Debug)]
 pub struct RoughConductor {
-    pub distr: Ggx,
+    pub distr: Microfacet,
     pub eta: Color,
     pub k: Color,
     pub specular_reflectance: Color,
 }
 
 impl RoughConductor {
-    pub fn new(
-        alpha_u: f32,
-        alpha_v: f32,
-        eta: Color,
-        k: Color,
-        specular_reflectance: Color,
-    ) -> Self {
+    pub fn new(distr: Microfacet, eta: Color, k: Color, specular_reflectance: Color) -> Self {
         RoughConductor {
-            distr: Ggx::new(alpha_u, alpha_v),
+            distr,
             eta,
             k,
             specular_reflectance,

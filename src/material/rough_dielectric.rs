@@ -1,7 +1,7 @@
 //! Rough dielectric interfaces (frosted glass): the microfacet BSDF of Walter et al.,
-//! "Microfacet Models for Refraction through Rough Surfaces", EGSR 2007, with the GGX
-//! distribution, reflection (eq. 20) and transmission (eq. 21), sampled by visible normals;
-//! as Mitsuba 3's `roughdielectric` with `distribution = "ggx"`, `sample_visible = true`.
+//! "Microfacet Models for Refraction through Rough Surfaces", EGSR 2007, with the Beckmann
+//! or GGX distribution, reflection (eq. 20) and transmission (eq. 21), sampled by visible
+//! normals; as Mitsuba 3's `roughdielectric` with `sample_visible = true`.
 //!
 //! For wo on the side with index n_o and η = n_i/n_o the index ratio in the direction of
 //! travel, the generalised half vector is h = ±(wo + η wi)/‖wo + η wi‖ (eq. 16), oriented
@@ -15,14 +15,14 @@
 //! probability F and 1 − F.
 
 use super::dielectric::{fresnel_dielectric, fresnel_refraction};
-use super::microfacet::{reflect_about, Ggx};
+use super::microfacet::{reflect_about, Microfacet};
 use super::{BsdfSample, TransportMode};
 use crate::Color;
 use glam::{Vec2, Vec3A};
 
 #[derive(Clone, Copy, Debug)]
 pub struct RoughDielectric {
-    pub distr: Ggx,
+    pub distr: Microfacet,
     /// Relative index of refraction: inside over outside (the side the normal points to).
     pub eta: f32,
 }
@@ -38,11 +38,8 @@ fn half_vector(wo: Vec3A, wi: Vec3A, eta: f32) -> (Vec3A, bool, f32) {
 }
 
 impl RoughDielectric {
-    pub fn new(alpha_u: f32, alpha_v: f32, eta: f32) -> Self {
-        RoughDielectric {
-            distr: Ggx::new(alpha_u, alpha_v),
-            eta,
-        }
+    pub fn new(distr: Microfacet, eta: f32) -> Self {
+        RoughDielectric { distr, eta }
     }
 
     #[inline]

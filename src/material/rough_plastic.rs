@@ -1,5 +1,5 @@
-//! Rough plastic: a diffuse base under a rough (GGX) dielectric coating, as Mitsuba 3's
-//! `roughplastic` with `distribution = "ggx"` (isotropic only, like Mitsuba's). The coating
+//! Rough plastic: a diffuse base under a rough (Beckmann or GGX) dielectric coating, as
+//! Mitsuba 3's `roughplastic` (isotropic only, like Mitsuba's). The coating
 //! reflects by the microfacet BRDF f_s = F(wo·h)·D(h)·G(wo, wi, h)/(4 cos θo cos θi) (Walter et
 //! al., EGSR 2007, eq. 20); the base is seen through it as
 //!
@@ -10,7 +10,7 @@
 //! Szirmay-Kalos, "A Microfacet Based Coupled Specular-Matte BRDF Model with Importance
 //! Sampling", Eurographics 2001, in Mitsuba's form. Like Mitsuba, T is tabulated at 64
 //! evenly spaced cos θ (linear interpolation) and R_int is a single number, both computed
-//! once per (α, η) by Gauss–Legendre quadrature over the visible-normal sampling square
+//! once per (distribution, α, η) by Gauss–Legendre quadrature over the visible-normal sampling square
 //! (Mitsuba's `eval_transmittance` and `eval_reflectance` in microfacet.h). The tables are
 //! cached for the life of the program and referenced by a `&'static`, so the BSDF stays
 //! `Copy` and small and evaluation allocates nothing.
@@ -19,7 +19,7 @@
 //! T(θo)·(1 − w)), w = s̄/(d̄ + s̄); the diffuse one cosine-weighted. `pdf` is the mixture.
 
 use super::dielectric::{fresnel_dielectric, fresnel_refraction};
-use super::microfacet::{reflect_about, Ggx};
+use super::microfacet::{reflect_about, Microfacet, MicrofacetType};
 use super::plastic::mean;
 use super::sampling::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
 use super::BsdfSample;
@@ -85,7 +85,7 @@ pub fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
 /// ∫ over visible normals of the energy leaving through the interface (`transmit`) or
 /// reflected back (`!transmit`), seen from `wi` (wi.z > 0), by n×n Gauss–Legendre quadrature
 /// on the sampling square: E[G1(w', m)·(1 − F or F)].
-fn coating_integral(distr: &Ggx, wi: Vec3A, eta: f32, n: usize, transmit: bool) -> f32 {
+fn coating_integral(distr: &Microfacet, wi: Vec3A, eta: f32, n: usize, transmit: bool) -> f32 {
     let (x, w) = gauss_legendre(n);
     let mut sum = 0.0f64;
     for a in 0..n {
@@ -115,8 +115,8 @@ fn coating_integral(distr: &Ggx, wi: Vec3A, eta: f32, n: usize, transmit: bool) 
     sum as f32
 }
 
-fn compute_table(alpha: f32, eta: f32) -> CoatingTable {
-    let distr = Ggx::new(alpha, alpha);
+fn compute_table(kind: MicrofacetType, alpha: f32, eta: f32) -> CoatingTable {
+    let distr = Microfacet::new(kind, alpha, alpha);
     let mut transmittance = [0.0f32; TRANSMITTANCE_RES];
     let mut r_sum = 0.0f64;
     let res_t = if eta > 1.0 { 32 } else { 128 };
@@ -133,19 +133,19 @@ fn compute_table(alpha: f32, eta: f32) -> CoatingTable {
     }
 }
 
-type CacheEntry = ((u32, u32), &'static CoatingTable);
+type CacheEntry = ((MicrofacetType, u32, u32), &'static CoatingTable);
 static CACHE: Mutex<Vec<CacheEntry>> = Mutex::new(Vec::new());
 
-/// The coating table for (α, η), computed on first use (tens of milliseconds) and kept for
-/// the life of the program.
-pub fn coating_table(alpha: f32, eta: f32) -> &'static CoatingTable {
+/// The coating table for (distribution, α, η), computed on first use (tens of milliseconds)
+/// and kept for the life of the program.
+pub fn coating_table(kind: MicrofacetType, alpha: f32, eta: f32) -> &'static CoatingTable {
     let alpha = alpha.max(1e-4);
-    let key = (alpha.to_bits(), eta.to_bits());
+    let key = (kind, alpha.to_bits(), eta.to_bits());
     if let Some(&(_, t)) = CACHE.lock().unwrap().iter().find(|(k, _)| *k == key) {
         return t;
     }
     // Computed outside the lock; a racing thread may compute the same table, only one is kept.
-    let table = compute_table(alpha, eta);
+    let table = compute_table(kind, alpha, eta);
     let mut cache = CACHE.lock().unwrap();
     if let Some(&(_, t)) = cache.iter().find(|(k, _)| *k == key) {
         return t;
@@ -157,7 +157,7 @@ pub fn coating_table(alpha: f32, eta: f32) -> &'static CoatingTable {
 
 #[derive(Clone, Copy, Debug)]
 pub struct RoughPlastic {
-    pub distr: Ggx,
+    pub distr: Microfacet,
     /// Index of the coating over that of the outside (`int_ior / ext_ior`).
     pub eta: f32,
     pub diffuse_reflectance: Color,
@@ -170,11 +170,18 @@ pub struct RoughPlastic {
 }
 
 impl RoughPlastic {
-    /// The first construction for a given (α, η) computes the coating table (see the module
-    /// documentation); later ones reuse it.
-    pub fn new(alpha: f32, eta: f32, diffuse: Color, specular: Color, nonlinear: bool) -> Self {
+    /// The first construction for a given (distribution, α, η) computes the coating table
+    /// (see the module documentation); later ones reuse it.
+    pub fn new(
+        kind: MicrofacetType,
+        alpha: f32,
+        eta: f32,
+        diffuse: Color,
+        specular: Color,
+        nonlinear: bool,
+    ) -> Self {
         let (d, s) = (mean(diffuse), mean(specular));
-        let distr = Ggx::new(alpha, alpha);
+        let distr = Microfacet::new(kind, alpha, alpha);
         RoughPlastic {
             distr,
             eta,
@@ -183,7 +190,7 @@ impl RoughPlastic {
             nonlinear,
             specular_sampling_weight: s / (d + s),
             inv_eta2: 1.0 / (eta * eta),
-            table: coating_table(distr.alpha_u, eta),
+            table: coating_table(kind, distr.alpha_u, eta),
         }
     }
 

@@ -11,8 +11,8 @@ use crate::geometry::mesh::TriangleMesh;
 use crate::integrator::IntegratorKind;
 use crate::material::conductor::{conductor_ior, conductor_names};
 use crate::material::{
-    Bsdf, Conductor, Dielectric, Lambert, Material, Mirror, OrenNayar, Plastic, RoughConductor,
-    RoughDielectric, RoughPlastic, ThinDielectric,
+    Bsdf, Conductor, Dielectric, Lambert, Material, Microfacet, MicrofacetType, Mirror, OrenNayar,
+    Plastic, RoughConductor, RoughDielectric, RoughPlastic, ThinDielectric,
 };
 use crate::texture::{Bitmap, BitmapTexture, FilterType, Texture, UvTransform, WrapMode};
 use crate::Color;
@@ -122,6 +122,7 @@ struct MaterialT {
     alpha: Option<Spanned<f32>>,
     alpha_u: Option<Spanned<f32>>,
     alpha_v: Option<Spanned<f32>>,
+    distribution: Option<Spanned<String>>,
     nonlinear: Option<Spanned<bool>>,
     two_sided: Option<Spanned<bool>>,
 }
@@ -296,37 +297,59 @@ impl Ctx<'_> {
     }
 
     /// GGX roughness: `alpha` (default 0.1), or `alpha_u` and `alpha_v`.
+    /// The microfacet distribution: `distribution` ("ggx", the default, or "beckmann") and
+    /// `alpha` or `alpha_u` and `alpha_v`.
     fn roughness(
         &self,
         t: &MaterialT,
         at: &std::ops::Range<usize>,
-    ) -> Result<(f32, f32), SceneError> {
+    ) -> Result<Microfacet, SceneError> {
+        let kind = match &t.distribution {
+            None => MicrofacetType::Ggx,
+            Some(d) => match MicrofacetType::parse(d.get_ref()) {
+                Some(k) => k,
+                None => {
+                    return self.err(
+                        d.span(),
+                        format!(
+                            "unknown microfacet distribution '{}' (expected ggx or beckmann)",
+                            d.get_ref()
+                        ),
+                    )
+                }
+            },
+        };
         let check = |v: &Spanned<f32>, key: &str| {
             if v.get_ref().is_finite() && *v.get_ref() > 0.0 {
                 Ok(*v.get_ref())
             } else {
                 self.err(
                     v.span(),
-                    format!("'{key}' (GGX roughness) must be a finite number > 0, such as 0.1 (rough) or 0.01 (nearly smooth)"),
+                    format!("'{key}' (microfacet roughness) must be a finite number > 0, such as 0.1 (rough) or 0.01 (nearly smooth)"),
                 )
             }
         };
-        match (&t.alpha, &t.alpha_u, &t.alpha_v) {
+        let (au, av) = match (&t.alpha, &t.alpha_u, &t.alpha_v) {
             (Some(a), None, None) => {
                 let a = check(a, "alpha")?;
-                Ok((a, a))
+                (a, a)
             }
-            (None, None, None) => Ok((0.1, 0.1)),
-            (None, Some(u), Some(v)) => Ok((check(u, "alpha_u")?, check(v, "alpha_v")?)),
-            (Some(a), _, _) => self.err(
-                a.span(),
-                "give either 'alpha' or 'alpha_u' and 'alpha_v', not both",
-            ),
-            (None, u, v) => self.err(
-                u.as_ref().or(v.as_ref()).map_or(at.clone(), |s| s.span()),
-                "anisotropic roughness needs both 'alpha_u' and 'alpha_v'",
-            ),
-        }
+            (None, None, None) => (0.1, 0.1),
+            (None, Some(u), Some(v)) => (check(u, "alpha_u")?, check(v, "alpha_v")?),
+            (Some(a), _, _) => {
+                return self.err(
+                    a.span(),
+                    "give either 'alpha' or 'alpha_u' and 'alpha_v', not both",
+                )
+            }
+            (None, u, v) => {
+                return self.err(
+                    u.as_ref().or(v.as_ref()).map_or(at.clone(), |s| s.span()),
+                    "anisotropic roughness needs both 'alpha_u' and 'alpha_v'",
+                )
+            }
+        };
+        Ok(Microfacet::new(kind, au, av))
     }
 }
 
@@ -950,6 +973,7 @@ fn material(cx: &Ctx, m: &Spanned<MaterialT>, tex: &Textures) -> Result<Material
         ("alpha", span_of(&t.alpha)),
         ("alpha_u", span_of(&t.alpha_u)),
         ("alpha_v", span_of(&t.alpha_v)),
+        ("distribution", span_of(&t.distribution)),
         ("nonlinear", span_of(&t.nonlinear)),
         ("two_sided", span_of(&t.two_sided)),
     ];
@@ -1006,15 +1030,14 @@ fn material(cx: &Ctx, m: &Spanned<MaterialT>, tex: &Textures) -> Result<Material
             Bsdf::ThinDielectric(ThinDielectric::new(eta_of(1.5046)?))
         }
         "roughdielectric" => {
-            cx.only(&present, &["ior", "ext_ior", "alpha", "alpha_u", "alpha_v"], &what)?;
-            let (au, av) = cx.roughness(t, &at)?;
-            Bsdf::RoughDielectric(RoughDielectric::new(au, av, eta_of(1.5046)?))
+            cx.only(&present, &["ior", "ext_ior", "alpha", "alpha_u", "alpha_v", "distribution"], &what)?;
+            Bsdf::RoughDielectric(RoughDielectric::new(cx.roughness(t, &at)?, eta_of(1.5046)?))
         }
         "conductor" | "roughconductor" => {
             let rough = kind == "roughconductor";
             let mut keys = vec!["material", "eta", "k", "reflectance", "two_sided"];
             if rough {
-                keys.extend(["alpha", "alpha_u", "alpha_v"]);
+                keys.extend(["alpha", "alpha_u", "alpha_v", "distribution"]);
             }
             cx.only(&present, &keys, &what)?;
             let (eta, k) = match (&t.material, &t.eta, &t.k) {
@@ -1044,8 +1067,7 @@ fn material(cx: &Ctx, m: &Spanned<MaterialT>, tex: &Textures) -> Result<Material
             let (r, tx) = main(&t.reflectance, "reflectance", Some(1.0))?;
             texture = tx;
             if rough {
-                let (au, av) = cx.roughness(t, &at)?;
-                Bsdf::RoughConductor(RoughConductor::new(au, av, eta, k, r))
+                Bsdf::RoughConductor(RoughConductor::new(cx.roughness(t, &at)?, eta, k, r))
             } else if eta == Color::ZERO && k == Color::ONE {
                 // material = "none": a perfect mirror (as Mitsuba's conductor).
                 Bsdf::Mirror(Mirror { reflectance: r })
@@ -1057,7 +1079,7 @@ fn material(cx: &Ctx, m: &Spanned<MaterialT>, tex: &Textures) -> Result<Material
             let rough = kind == "roughplastic";
             let mut keys = vec!["albedo", "specular", "ior", "ext_ior", "nonlinear", "two_sided"];
             if rough {
-                keys.push("alpha");
+                keys.extend(["alpha", "distribution"]);
             }
             cx.only(&present, &keys, &what)?;
             let (d, tx) = main(&t.albedo, "albedo", Some(0.5))?;
@@ -1066,8 +1088,8 @@ fn material(cx: &Ctx, m: &Spanned<MaterialT>, tex: &Textures) -> Result<Material
             let nonlinear = t.nonlinear.as_ref().is_some_and(|v| *v.get_ref());
             let eta = eta_of(1.49)?;
             if rough {
-                let (a, _) = cx.roughness(t, &at)?;
-                Bsdf::RoughPlastic(RoughPlastic::new(a, eta, d, spec, nonlinear))
+                let distr = cx.roughness(t, &at)?;
+                Bsdf::RoughPlastic(RoughPlastic::new(distr.kind, distr.alpha_u, eta, d, spec, nonlinear))
             } else {
                 Bsdf::Plastic(Plastic::new(eta, d, spec, nonlinear))
             }

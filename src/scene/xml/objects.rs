@@ -9,8 +9,8 @@ use crate::integrator::IntegratorKind;
 use crate::limits;
 use crate::material::conductor::{conductor_ior, conductor_names};
 use crate::material::{
-    Bsdf, Conductor, Dielectric, Lambert, Material, Mirror, Plastic, RoughConductor,
-    RoughDielectric, RoughPlastic, ThinDielectric,
+    Bsdf, Conductor, Dielectric, Lambert, Material, Microfacet, MicrofacetType, Mirror, Plastic,
+    RoughConductor, RoughDielectric, RoughPlastic, ThinDielectric,
 };
 use crate::scene::desc::{GeometryDesc, LightDesc, SceneDesc, ShapeDesc};
 use crate::scene::obj::load_obj;
@@ -441,29 +441,21 @@ impl<'a> Builder<'a> {
         Ok(i)
     }
 
-    /// Microfacet roughness: `alpha`, or `alpha_u` and `alpha_v`; GGX only.
-    fn roughness(&mut self, p: &Props<'a>) -> Result<(f32, f32)> {
+    /// The microfacet distribution: `distribution` (`beckmann`, Mitsuba's default, or
+    /// `ggx`, in any case) and `alpha`, or `alpha_u` and `alpha_v`.
+    fn roughness(&self, p: &Props<'a>) -> Result<Microfacet> {
         let e = p.owner;
-        let d = p.string_opt("distribution")?;
-        match d {
-            Some("ggx") => {}
-            Some("beckmann") | None => {
-                let msg = "the Beckmann distribution (Mitsuba's default) is not supported: add \
-                           <string name=\"distribution\" value=\"ggx\"/>";
-                if !self.lenient {
-                    return Err(self.doc.err(e, msg));
-                }
-                self.warn(
-                    e,
-                    "Beckmann roughness rendered as GGX of the same alpha (--lenient)",
-                );
-            }
-            Some(other) => {
-                return Err(self
-                    .doc
-                    .err(e, format!("distribution '{other}': expected ggx")))
-            }
-        }
+        let kind = match p.string_opt("distribution")? {
+            None => MicrofacetType::Beckmann,
+            Some(d) => MicrofacetType::parse(d).ok_or_else(|| {
+                let at = p.elem("distribution").unwrap_or(e);
+                self.doc.err_attr(
+                    at,
+                    "value",
+                    format!("distribution '{d}': expected beckmann or ggx"),
+                )
+            })?,
+        };
         p.ignore("sample_visible");
         let a = p.float("alpha", 0.1)?;
         let au = p.float("alpha_u", a)?;
@@ -473,7 +465,7 @@ impl<'a> Builder<'a> {
                 return Err(self.doc.err(e, format!("{n} must be positive, got {v}")));
             }
         }
-        Ok((au, av))
+        Ok(Microfacet::new(kind, au, av))
     }
 
     /// A conductor's complex index of refraction: a named `material`, or `eta` and `k`.
@@ -539,10 +531,7 @@ impl<'a> Builder<'a> {
                 match kind {
                     "dielectric" => Bsdf::Dielectric(Dielectric { eta }),
                     "thindielectric" => Bsdf::ThinDielectric(ThinDielectric::new(eta)),
-                    _ => {
-                        let (au, av) = self.roughness(&p)?;
-                        Bsdf::RoughDielectric(RoughDielectric::new(au, av, eta))
-                    }
+                    _ => Bsdf::RoughDielectric(RoughDielectric::new(self.roughness(&p)?, eta)),
                 }
             }
             "conductor" | "roughconductor" => {
@@ -557,8 +546,7 @@ impl<'a> Builder<'a> {
                         Bsdf::Conductor(Conductor::new(eta, k, r))
                     }
                 } else {
-                    let (au, av) = self.roughness(&p)?;
-                    Bsdf::RoughConductor(RoughConductor::new(au, av, eta, k, r))
+                    Bsdf::RoughConductor(RoughConductor::new(self.roughness(&p)?, eta, k, r))
                 }
             }
             "plastic" | "roughplastic" => {
@@ -570,11 +558,11 @@ impl<'a> Builder<'a> {
                 if kind == "plastic" {
                     Bsdf::Plastic(Plastic::new(eta, d, s, nonlinear))
                 } else {
-                    let (au, av) = self.roughness(&p)?;
-                    if au != av {
+                    let m = self.roughness(&p)?;
+                    if m.alpha_u != m.alpha_v {
                         return Err(self.doc.err(e, "roughplastic is isotropic: give 'alpha'"));
                     }
-                    Bsdf::RoughPlastic(RoughPlastic::new(au, eta, d, s, nonlinear))
+                    Bsdf::RoughPlastic(RoughPlastic::new(m.kind, m.alpha_u, eta, d, s, nonlinear))
                 }
             }
             _ => {

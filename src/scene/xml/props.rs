@@ -190,6 +190,11 @@ impl<'a> Props<'a> {
         Some(p.elem)
     }
 
+    /// The element of property `name`, for error positions (does not mark it used).
+    pub fn elem(&self, name: &str) -> Option<&'a Elem> {
+        self.props.iter().find(|p| p.name == name).map(|p| p.elem)
+    }
+
     pub fn has(&self, name: &'static str) -> bool {
         self.props.iter().any(|p| p.name == name)
     }
