@@ -443,13 +443,7 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
     if a.threads == Some(0) {
         return Err(Error::Usage("--threads must be at least 1".into()));
     }
-    if let Some(e) = a.target_noise {
-        if !(e > 0.0 && e.is_finite()) {
-            return Err(Error::Usage(format!(
-                "--target-noise must be a positive number, got {e}"
-            )));
-        }
-    }
+    mcrt::session::check_target_noise(a.target_noise)?;
     let aovs = match &a.aov {
         Some(list) => mcrt::aov::parse_list(list).map_err(Error::Usage)?,
         None => Vec::new(),
@@ -652,7 +646,7 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
         }
         Ok(())
     };
-    let outcome = mcrt::progressive::render_progressive(
+    let outcome = match mcrt::progressive::render_progressive(
         &scene,
         &settings,
         &mut film,
@@ -661,7 +655,25 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
         &CANCEL,
         &mut after_pass,
         &|n| bar.inc(n),
-    )?;
+    ) {
+        // Stopped while the photon maps were traced: no sample to show, nothing written.
+        Err(Error::Render(mcrt::render::RenderError::Interrupted)) => {
+            bar.finish_and_clear();
+            if CANCEL.load(Ordering::SeqCst) {
+                eprintln!(
+                    "{}: interrupted while the photon maps were built; nothing written",
+                    output.display()
+                );
+                return Ok(INTERRUPTED);
+            }
+            return Err(Error::Usage(
+                "the time budget (--time) was spent while the photon maps were built, before \
+                 the first sample; nothing written: give more time or fewer photons"
+                    .into(),
+            ));
+        }
+        r => r?,
+    };
     bar.finish_and_clear();
     if let Some(p) = &preview {
         p.set_state(mcrt::preview::State::Done);
@@ -798,6 +810,7 @@ fn render_pass(
             rays as f64 / secs / 1e6,
             stats.rays.shadow_rays as f64 / secs / 1e6,
         );
+        print_photon_stats(&stats);
         warn_dropped(&stats);
     }
     Ok(0)
@@ -917,11 +930,12 @@ fn render_sppm(
         || a.aov.is_some()
         || a.preview.is_some()
         || a.denoise
+        || a.backend.is_some_and(|b| b != mcrt::render::Backend::Auto)
     {
         return Err(Error::Usage(
-            "--integrator sppm renders the whole image at once: --pass, --time, \
-             --target-noise, --resume, --write-partial, --aov, --preview and --denoise apply \
-             to path, direct and photon"
+            "--integrator sppm renders the whole image at once, one path at a time: --pass, \
+             --time, --target-noise, --resume, --write-partial, --aov, --preview, --denoise \
+             and --backend apply to path, direct and photon"
                 .into(),
         ));
     }

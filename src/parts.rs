@@ -27,11 +27,15 @@
 //!   words, least significant first (two's complement);
 //! - `sumsq.{R,G,B}.w{0..3}` (u32): Σ L², an i128 in units of 2^-48;
 //! - `count` (u32): samples that reached the pixel (NaN and infinite samples are dropped);
+//! - `splat.{R,G,B}.w{0..3}` (u32), only where the film has splats ([`Film::splat`]): their
+//!   Σ, as `sum`;
 //!
 //! and a text attribute `mcrtSums` of `key=value` lines ([`PartMeta`]): mcrt's version, the
 //! scene file and a hash of its bytes, the settings, the seed, spp, the image size and crop,
 //! and which pass of how many it holds, so that `merge` can check that the parts belong
-//! together and cover every pass once. A merged film written with `--keep-sums` is the sums
+//! together and cover every pass once; then `splat_paths=N` where the film traced paths that
+//! splat, and `checksum=` over every integer channel (and the path count), so that a file
+//! changed after it was written is refused. A merged film written with `--keep-sums` is the sums
 //! file of pass 1/1.
 
 use crate::film::Film;
@@ -585,8 +589,9 @@ pub fn decode_part(
     if splats {
         film.splat = vec![[0; 3]; film.sum.len()];
         read_words(&mut words, &mut film.splat)?;
-        film.splat_paths = splat_paths;
     }
+    // Paths count even when none of them splatted anything.
+    film.splat_paths = splat_paths;
     let more = words.map(|v| v.to_vec()).collect();
     Ok((Part { meta, film }, more))
 }

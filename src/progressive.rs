@@ -1,5 +1,5 @@
 //! Long renders: progressive passes under budgets (samples, time, noise), interruption between
-//! tiles, and the noise estimate that `--target-noise` and `--adaptive` use.
+//! steps of a tile's samples, and the noise estimate that `--target-noise` and `--adaptive` use.
 //!
 //! # Passes
 //!
@@ -43,7 +43,7 @@ pub const MIN_NOISE_SPP: u32 = 16;
 pub struct Budget {
     /// At most this many samples per pixel (None: no limit).
     pub spp: Option<u32>,
-    /// Wall-clock time for the passes.
+    /// Wall-clock time for the passes and for making the integrator ready (photon maps).
     pub time: Option<Duration>,
     /// Stop when the relative standard error E falls to this.
     pub target_noise: Option<f64>,
@@ -140,7 +140,8 @@ pub type AfterPass<'a, E> = dyn FnMut(&Film, &[u32]) -> Result<(), E> + 'a;
 /// documentation) until the budget is spent or `cancel` is set. After each pass that rendered
 /// anything, `after_pass(film, next)` runs (for partial images and checkpoints); an error
 /// from it ends the render. The integrator is made ready once (photon maps are built before
-/// the first pass, inside the time budget) and renders every pass.
+/// the first pass, inside the time budget) and renders every pass; a stop or a spent budget
+/// while it is made ready ends with [`RenderError::Interrupted`].
 #[allow(clippy::too_many_arguments)]
 pub fn render_progressive<E: From<RenderError>>(
     scene: &Scene,
@@ -155,21 +156,9 @@ pub fn render_progressive<E: From<RenderError>>(
     let start = Instant::now();
     let deadline = budget.time.map(|t| start + t);
     let stop = || cancel.load(Ordering::SeqCst) || deadline.is_some_and(|d| Instant::now() >= d);
-    let integrator = match integrator::prepare(scene, s, &stop) {
-        Err(RenderError::Interrupted) => {
-            let why = match cancel.load(Ordering::SeqCst) {
-                true => Stop::Interrupted,
-                false => Stop::Time,
-            };
-            return Ok(Outcome {
-                stop: why,
-                stats: RenderStats::default(),
-                passes: 0,
-                noise: None,
-            });
-        }
-        r => r?,
-    };
+    // Stopped while it was being made ready (photon tracing), the render has no sample to
+    // show: [`RenderError::Interrupted`], and the caller writes nothing.
+    let integrator = integrator::prepare(scene, s, &stop)?;
     let cap = budget.spp.unwrap_or(u32::MAX);
     let npix = next.len().max(1) as f64;
     let mut stats = RenderStats::default();

@@ -233,10 +233,11 @@ pub struct TilePixel {
 /// so the film after any sequence of calls that leaves pixel i at next[i] = n holds exactly
 /// samples [0, n) of it, bit for bit, however they were split.
 ///
-/// `stop` is asked before each tile: once it returns true, the tiles not yet started are
-/// skipped (their pixels keep their `next`), so an abandoned call leaves the film and `next`
-/// consistent — every pixel holds a prefix of its sample sequence. `stats.skipped_tiles`
-/// counts them.
+/// `stop` is asked before each tile and between steps of a tile's samples
+/// ([`render_tile_steps`]): once it returns true, the tiles not yet started are skipped
+/// (`stats.skipped_tiles` counts them) and started ones end after their current step, so an
+/// abandoned call leaves the film and `next` consistent — every pixel holds a prefix of its
+/// sample sequence.
 ///
 /// The image's tiles are rendered in parallel, each tile's samples by `integrator`.
 #[allow(clippy::too_many_arguments)]

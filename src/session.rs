@@ -79,6 +79,17 @@ pub fn build(path: &Path, desc: SceneDesc) -> Result<Scene, Error> {
     Ok(Scene::build(desc))
 }
 
+/// Refuses a `--target-noise` that is not a positive number (checked before the scene is
+/// loaded, and again with the budget).
+pub fn check_target_noise(target_noise: Option<f64>) -> Result<(), Error> {
+    match target_noise {
+        Some(e) if !(e > 0.0 && e.is_finite()) => Err(Error::Usage(format!(
+            "--target-noise must be a positive number, got {e}"
+        ))),
+        _ => Ok(()),
+    }
+}
+
 /// The budget of the progressive passes: at most `settings.spp` samples per pixel, except that
 /// with a time or noise target and no sample count given (`spp_given` false) the samples are
 /// unbounded (the scene file's spp is then ignored).
@@ -90,13 +101,7 @@ pub fn budget(
     adaptive: bool,
     max_pass: Option<Duration>,
 ) -> Result<Budget, Error> {
-    if let Some(e) = target_noise {
-        if !(e > 0.0 && e.is_finite()) {
-            return Err(Error::Usage(format!(
-                "--target-noise must be a positive number, got {e}"
-            )));
-        }
-    }
+    check_target_noise(target_noise)?;
     Ok(Budget {
         spp: if (time.is_some() || target_noise.is_some()) && !spp_given {
             None

@@ -151,7 +151,10 @@ bad_input!(
 bad_input!(toml_missing_mesh_file_toml, "toml-missing-mesh-file.toml");
 bad_input!(toml_nan_albedo_toml, "toml-nan-albedo.toml");
 bad_input!(toml_negative_ior_toml, "toml-negative-ior.toml");
-bad_input!(toml_unknown_distribution_toml, "toml-unknown-distribution.toml");
+bad_input!(
+    toml_unknown_distribution_toml,
+    "toml-unknown-distribution.toml"
+);
 bad_input!(toml_negative_radius_toml, "toml-negative-radius.toml");
 bad_input!(toml_negative_width_toml, "toml-negative-width.toml");
 bad_input!(

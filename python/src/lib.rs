@@ -277,7 +277,7 @@ fn request(
 struct Job {
     scene: Arc<mcrt::scene::Scene>,
     settings: RenderSettings,
-    /// None: the photon integrators, rendered in one go.
+    /// None: `sppm`, rendered in one go.
     budget: Option<Budget>,
     aovs: Vec<Aov>,
 }
@@ -296,7 +296,8 @@ impl Job {
     ) -> Result<Output, mcrt::Error> {
         let (scene, s) = (&*self.scene, &self.settings);
         let Some(budget) = &self.budget else {
-            let (film, _) = mcrt::render::render(scene, s, progress)?;
+            let stop = || cancel.load(Ordering::SeqCst);
+            let (film, _) = mcrt::render::render_until(scene, s, progress, &stop)?;
             return Ok(Output {
                 image: film.image(),
                 layers: Vec::new(),
@@ -391,8 +392,8 @@ impl<'py> Reporter<'py> {
 
 /// Runs the job on a worker thread with the GIL released; every 100 ms (and at the end) the
 /// calling thread reports progress and checks for signals. Ctrl-C (or an exception from the
-/// progress callback) sets the cancel flag: the workers stop at the next tile and the
-/// exception is raised.
+/// progress callback) sets the cancel flag: the workers stop after their current step of a
+/// tile's samples and the exception is raised.
 fn run_job(
     py: Python<'_>,
     job: &Job,
@@ -457,15 +458,15 @@ fn run_job(
 /// `target_noise` a relative standard error at which to stop (with either and no `spp` the
 /// samples are unbounded); `adaptive` spends samples where the noise is above the target.
 ///
-/// `aovs` ("albedo,normal" or a list of names among albedo, normal, depth, variance, spp)
+/// `aovs` ("albedo,normal" or a list of names among albedo, normal, emission, depth, variance,
+/// spp)
 /// makes it return a dict instead: "image" and one array per AOV, (height, width, 3) or, for
 /// depth and spp, (height, width).
 ///
 /// `progress` is a callable `f(done, total)` (samples; total None when unbounded), called
 /// about ten times a second from the calling thread, or True for a tqdm bar where tqdm is
-/// installed. Ctrl-C stops the render within a tile and raises KeyboardInterrupt (the photon
-/// integrators, which trace their maps and render in one go, stop only when done, as in the
-/// command).
+/// installed. Ctrl-C stops the render within a tile (photon tracing between chunks, sppm
+/// between iterations) and raises KeyboardInterrupt.
 #[pyfunction]
 #[pyo3(signature = (scene, *, spp=None, width=None, height=None, seed=None, integrator=None, time=None, threads=None, sampler=None, max_depth=None, shadow_rays=None, camera=None, target_noise=None, adaptive=false, aovs=None, progress=None))]
 #[allow(clippy::too_many_arguments)]
@@ -518,18 +519,14 @@ fn render<'py>(
     let (_, _, fw, fh) = settings.window();
     let npix = fw as u64 * fh as u64;
     let (budget, total) = match settings.params.kind {
-        IntegratorKind::Photon | IntegratorKind::Sppm => {
+        IntegratorKind::Sppm => {
             if time.is_some() || target_noise.is_some() || adaptive || want_dict {
-                return Err(usage(format!(
-                    "integrator {} renders the whole image at once: time, target_noise, \
-                     adaptive and aovs apply to path and direct",
-                    settings.params.kind.name()
-                )));
+                return Err(usage(
+                    "integrator sppm renders the whole image at once: time, target_noise, \
+                     adaptive and aovs apply to path, direct and photon",
+                ));
             }
-            let passes = match settings.params.kind {
-                IntegratorKind::Sppm => settings.params.photon.iterations,
-                _ => settings.spp,
-            };
+            let passes = settings.params.photon.iterations;
             (None, Some(npix.saturating_mul(passes as u64)))
         }
         _ => {

@@ -230,8 +230,9 @@ impl RayStats {
     }
 }
 
-/// Radiance along a camera ray, by the chosen integrator. The photon-mapping integrators
-/// need their maps (built by [`crate::render::render`]); here they fall back to `path`.
+/// Radiance along a camera ray by `path` or `direct` (what [`path::PathTracer`] and
+/// [`direct::DirectLighting`] call). The photon-mapping integrators need their maps, which
+/// [`prepare`] builds; they are not rendered here (a `kind` of theirs gives `path`).
 ///
 /// Where the CPU has AVX2, FMA, BMI1/2 and LZCNT (x86-64-v3: Intel since 2013, AMD since
 /// 2015), the whole path (traversal, intersection tests, BSDFs, light sampling: everything

@@ -32,8 +32,8 @@ impl<'a> PathTracer<'a> {
         let lanes = false;
         if matches!(s.backend, Backend::Avx512 | Backend::Avx2) && !lanes {
             return Err(RenderError::Unsupported(format!(
-                "--backend {} needs a CPU with it and a scene the wavefront takes (see \
-                 docs/performance.md); --backend auto picks what runs",
+                "--backend {} needs a CPU with it, a scene the wavefront takes and settings it \
+                 runs (see docs/performance.md); --backend auto picks what runs",
                 s.backend.name()
             )));
         }
