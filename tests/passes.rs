@@ -477,3 +477,34 @@ fn backend_is_a_render_setting() {
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
 }
+
+/// A time budget spent while the photon maps are still being traced leaves no sample to
+/// show: nothing is written (an existing output stays), exit 2 with a message that says so.
+#[test]
+fn photon_budget_spent_on_the_maps_writes_nothing() {
+    let dir = TempDir::new("photon-budget");
+    let out = dir.path().join("out.exr");
+    std::fs::write(&out, b"keep").unwrap();
+    let o = render_cmd(
+        &out,
+        4,
+        &[
+            "--integrator",
+            "photon",
+            "--photons",
+            "2000000",
+            "--time",
+            "1ms",
+        ],
+    )
+    .output()
+    .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("photon maps"), "{err}");
+    assert_eq!(
+        std::fs::read(&out).unwrap(),
+        b"keep",
+        "the output was overwritten"
+    );
+}
