@@ -431,18 +431,8 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
             output.display()
         )));
     }
-    let max_depth = match a.max_depth {
-        None | Some(-1) => None,
-        Some(d) if d >= 0 && d <= u32::MAX as i64 => Some(d as u32),
-        Some(d) => {
-            return Err(Error::Usage(format!(
-                "--max-depth must be -1 (unlimited) or at least 0, got {d}"
-            )))
-        }
-    };
-    if a.threads == Some(0) {
-        return Err(Error::Usage("--threads must be at least 1".into()));
-    }
+    let max_depth = mcrt::session::max_depth(a.max_depth)?;
+    mcrt::session::check_threads(a.threads)?;
     mcrt::session::check_target_noise(a.target_noise)?;
     let aovs = match &a.aov {
         Some(list) => mcrt::aov::parse_list(list).map_err(Error::Usage)?,

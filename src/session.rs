@@ -79,6 +79,25 @@ pub fn build(path: &Path, desc: SceneDesc) -> Result<Scene, Error> {
     Ok(Scene::build(desc))
 }
 
+/// `--max-depth`: absent or -1 is unlimited (None), otherwise a limit of at least 0.
+pub fn max_depth(flag: Option<i64>) -> Result<Option<u32>, Error> {
+    match flag {
+        None | Some(-1) => Ok(None),
+        Some(d) if (0..=u32::MAX as i64).contains(&d) => Ok(Some(d as u32)),
+        Some(d) => Err(Error::Usage(format!(
+            "--max-depth must be -1 (unlimited) or at least 0, got {d}"
+        ))),
+    }
+}
+
+/// `--threads`: at least one.
+pub fn check_threads(threads: Option<usize>) -> Result<(), Error> {
+    match threads {
+        Some(0) => Err(Error::Usage("--threads must be at least 1".into())),
+        _ => Ok(()),
+    }
+}
+
 /// Refuses a `--target-noise` that is not a positive number (checked before the scene is
 /// loaded, and again with the budget).
 pub fn check_target_noise(target_noise: Option<f64>) -> Result<(), Error> {

@@ -241,18 +241,8 @@ fn request(
             ))
         })?),
     };
-    let max_depth_limit = match max_depth {
-        None | Some(-1) => None,
-        Some(d) if d >= 0 && d <= u32::MAX as i64 => Some(d as u32),
-        Some(d) => {
-            return Err(usage(format!(
-                "--max-depth must be -1 (unlimited) or at least 0, got {d}"
-            )))
-        }
-    };
-    if threads == Some(0) {
-        return Err(usage("--threads must be at least 1"));
-    }
+    let max_depth_limit = mcrt::session::max_depth(max_depth).map_err(|e| usage(e.to_string()))?;
+    mcrt::session::check_threads(threads).map_err(|e| usage(e.to_string()))?;
     Ok(Request {
         over: FileSettings {
             width,
