@@ -123,3 +123,25 @@ impl fmt::Display for SceneError {
 }
 
 impl std::error::Error for SceneError {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn long_user_strings_are_cut_short() {
+        let name = "c".repeat(50_000);
+        let msg = format!("no camera named '{name}' (defined: main)");
+        let m = shorten_message(&msg);
+        assert!(m.len() < 200, "{m}");
+        assert!(m.starts_with("no camera named 'ccc"));
+        assert!(m.contains("50002 bytes in all"));
+        assert!(m.ends_with("(defined: main)"));
+        // Many short words: the start and the end are kept.
+        let many = format!("what {} expected", "word ".repeat(10_000));
+        let m = shorten_message(&many);
+        assert!(m.len() <= 2100 && m.starts_with("what") && m.ends_with("expected"));
+        // Short messages stay as they are.
+        assert_eq!(shorten_message("a 'b' c"), "a 'b' c");
+    }
+}
