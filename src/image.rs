@@ -475,22 +475,37 @@ pub fn decode_exr(bytes: &[u8]) -> Result<Image, String> {
 /// Reads an OpenEXR file's headers and checks, before anything the size of its pixels is
 /// allocated, that decoding its largest layer fits in memory ([`crate::check_allocation`]):
 /// the decoder's samples of every channel plus `per_pixel` bytes a pixel for the caller's
-/// copy. A header may claim any size (a 313-byte file can claim 100000 × 100000 pixels).
+/// copy, and the decoder's working memory, two copies of a decompressed block for each
+/// thread decoding at once. A header may claim any size (a 313-byte file can claim
+/// 100000 × 100000 pixels, one scanline block of a ZIP file 16 lines of any width).
 pub fn check_exr_memory(bytes: &[u8], per_pixel: u64) -> Result<(), String> {
+    use exr::meta::BlockDescription;
     let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
         .map_err(|e| e.to_string())?;
+    let threads = rayon::current_num_threads() as u64;
     let mut largest = (0u64, 0usize, 0usize);
     for h in meta.headers.iter() {
         let (w, ht) = (h.layer_size.width(), h.layer_size.height());
+        let pixels = (w as u64).saturating_mul(ht as u64);
         let samples: u64 = h
             .channels
             .list
             .iter()
             .map(|c| c.sample_type.bytes_per_sample() as u64)
             .sum();
-        let need = (w as u64)
-            .saturating_mul(ht as u64)
-            .saturating_mul(samples.saturating_add(per_pixel));
+        let block = match h.blocks {
+            BlockDescription::Tiles(t) => {
+                (t.tile_size.width() as u64).saturating_mul(t.tile_size.height() as u64)
+            }
+            BlockDescription::ScanLines => {
+                (h.compression.scan_lines_per_block() as u64).saturating_mul(w as u64)
+            }
+        }
+        .min(pixels);
+        let working = block.saturating_mul(samples).saturating_mul(2 * threads);
+        let need = pixels
+            .saturating_mul(samples.saturating_add(per_pixel))
+            .saturating_add(working);
         if need > largest.0 {
             largest = (need, w, ht);
         }
