@@ -646,16 +646,22 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
         &mut after_pass,
         &|n| bar.inc(n),
     ) {
-        // Stopped while the photon maps were traced: no sample to show, nothing written.
+        // Interrupted while the photon maps were traced: the render ends as any interrupted
+        // one, with its (empty) image and a checkpoint that resumes from the start.
+        Err(Error::Render(mcrt::render::RenderError::Interrupted))
+            if CANCEL.load(Ordering::SeqCst) =>
+        {
+            mcrt::progressive::Outcome {
+                stop: Stop::Interrupted,
+                stats: Default::default(),
+                passes: 0,
+                noise: None,
+            }
+        }
+        // The time budget spent before the first sample: an image of nothing would pass
+        // for a result, so nothing is written.
         Err(Error::Render(mcrt::render::RenderError::Interrupted)) => {
             bar.finish_and_clear();
-            if CANCEL.load(Ordering::SeqCst) {
-                eprintln!(
-                    "{}: interrupted while the photon maps were built; nothing written",
-                    output.display()
-                );
-                return Ok(INTERRUPTED);
-            }
             return Err(Error::Usage(
                 "the time budget (--time) was spent while the photon maps were built, before \
                  the first sample; nothing written: give more time or fewer photons"

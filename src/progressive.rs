@@ -156,8 +156,8 @@ pub fn render_progressive<E: From<RenderError>>(
     let start = Instant::now();
     let deadline = budget.time.map(|t| start + t);
     let stop = || cancel.load(Ordering::SeqCst) || deadline.is_some_and(|d| Instant::now() >= d);
-    // Stopped while it was being made ready (photon tracing), the render has no sample to
-    // show: [`RenderError::Interrupted`], and the caller writes nothing.
+    // Stopped while it was being made ready (photon tracing): [`RenderError::Interrupted`];
+    // the film and `next` are untouched.
     let integrator = integrator::prepare(scene, s, &stop)?;
     let cap = budget.spp.unwrap_or(u32::MAX);
     let npix = next.len().max(1) as f64;

@@ -27,27 +27,13 @@ impl SceneError {
     }
 }
 
-/// Characters of a user's string that a message shows.
-pub const SHOWN: usize = 64;
-
-/// `s` for a message: whole if short, else its first [`SHOWN`] characters and how long it
-/// was, so a 50 MB name or value is not echoed in full.
-pub fn shorten(s: &str) -> std::borrow::Cow<'_, str> {
-    match s.char_indices().nth(SHOWN) {
-        None => std::borrow::Cow::Borrowed(s),
-        Some((end, _)) => {
-            std::borrow::Cow::Owned(format!("{}… ({} bytes in all)", &s[..end], s.len()))
-        }
-    }
-}
-
 /// Longest message kept whole, in bytes; a longer one keeps its start and its end.
 const MAX_MESSAGE: usize = 2000;
 /// Longest run of non-blank characters (a name, a value, a path) kept whole in a message.
 const MAX_WORD: usize = 200;
 
 /// A message with user strings cut short: every run of non-blank characters longer than
-/// `MAX_WORD` bytes is [`shorten`]ed, and a message still longer than `MAX_MESSAGE` keeps
+/// `MAX_WORD` bytes is [`crate::input::shorten`]ed, and a message still longer than `MAX_MESSAGE` keeps
 /// its first and last parts (what is wrong, and what was expected) around an ellipsis.
 pub fn shorten_message(msg: &str) -> std::borrow::Cow<'_, str> {
     let long_word = msg.split_whitespace().any(|w| w.len() > MAX_WORD);
@@ -64,7 +50,7 @@ pub fn shorten_message(msg: &str) -> std::borrow::Cow<'_, str> {
         rest = &rest[blank..];
         let word = rest.find(char::is_whitespace).unwrap_or(rest.len());
         if word > MAX_WORD {
-            out.push_str(&shorten(&rest[..word]));
+            out.push_str(&crate::input::shorten(&rest[..word]));
         } else {
             out.push_str(&rest[..word]);
         }
@@ -135,7 +121,7 @@ mod tests {
         let m = shorten_message(&msg);
         assert!(m.len() < 200, "{m}");
         assert!(m.starts_with("no camera named 'ccc"));
-        assert!(m.contains("50002 bytes in all"));
+        assert!(m.contains("(50002 characters)"), "{m}");
         assert!(m.ends_with("(defined: main)"));
         // Many short words: the start and the end are kept.
         let many = format!("what {} expected", "word ".repeat(10_000));
