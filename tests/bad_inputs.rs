@@ -234,8 +234,13 @@ bad_input!(xml_nan_radius_xml, "xml-nan-radius.xml");
 bad_input!(xml_negative_colour_xml, "xml-negative-colour.xml");
 bad_input!(xml_negative_radius_xml, "xml-negative-radius.xml");
 bad_input!(xml_radius_overflows_f32_xml, "xml-radius-overflows-f32.xml");
+bad_input!(xml_rgb_overflows_f32_xml, "xml-rgb-overflows-f32.xml");
 bad_input!(xml_rgb_two_numbers_xml, "xml-rgb-two-numbers.xml");
 bad_input!(xml_root_not_scene_xml, "xml-root-not-scene.xml");
+bad_input!(
+    xml_translate_overflows_f32_xml,
+    "xml-translate-overflows-f32.xml"
+);
 bad_input!(xml_rotate_without_angle_xml, "xml-rotate-without-angle.xml");
 bad_input!(
     xml_spectrum_by_wavelength_xml,

@@ -14,10 +14,20 @@ pub type Result<T> = std::result::Result<T, SceneError>;
 
 /// Parses a list of numbers separated by commas and/or white space.
 pub fn numbers(s: &str) -> Option<Vec<f32>> {
+    tokens(s).map(|t| t.parse::<f32>().ok()).collect()
+}
+
+/// The numbers of a list, separated by commas or blanks.
+fn tokens(s: &str) -> impl Iterator<Item = &str> {
     s.split(|c: char| c == ',' || c.is_whitespace())
         .filter(|t| !t.is_empty())
-        .map(|t| t.parse::<f32>().ok())
-        .collect()
+}
+
+/// Why a number of the list `s` does not fit an f32 ([`crate::scene::text::f32_fault`]).
+pub fn numbers_fault(s: &str) -> Option<String> {
+    tokens(s)
+        .filter_map(|t| t.parse::<f64>().ok())
+        .find_map(crate::scene::text::f32_fault)
 }
 
 /// Where a colour comes from: a constant or a texture element.
@@ -322,7 +332,11 @@ impl<'a> Props<'a> {
             "float" => Ok(ColorSrc::Const(Color::splat(self.float(name, 0.0)?))),
             "rgb" | "spectrum" => {
                 let v = self.value(e)?;
+                if let Some(f) = numbers_fault(v) {
+                    return Err(self.doc.err_attr(e, "value", format!("'{name}': {f}")));
+                }
                 let n = numbers(v).filter(|n| n.iter().all(|x| x.is_finite()));
+                let v = crate::input::shorten(v);
                 if n.as_ref().is_some_and(|n| n.iter().any(|x| *x < 0.0)) {
                     return Err(self.doc.err_attr(
                         e,
@@ -416,12 +430,18 @@ impl<'a> Props<'a> {
 /// `default`).
 pub fn xyz(doc: &Document, e: &Elem, default: f32) -> Result<Vec3> {
     if let Some(v) = e.attr("value") {
+        if let Some(f) = numbers_fault(v) {
+            return Err(doc.err_attr(e, "value", f));
+        }
         return match numbers(v).as_deref() {
             Some([x, y, z]) if [x, y, z].iter().all(|c| c.is_finite()) => Ok(Vec3::new(*x, *y, *z)),
             _ => Err(doc.err_attr(
                 e,
                 "value",
-                format!("expected three numbers 'x, y, z', found '{v}'"),
+                format!(
+                    "expected three numbers 'x, y, z', found '{}'",
+                    crate::input::shorten(v)
+                ),
             )),
         };
     }

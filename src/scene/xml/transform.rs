@@ -35,6 +35,9 @@ pub fn parse_transform(doc: &Document, e: &Elem) -> Result<Mat4> {
             }
             "matrix" => {
                 let v = op.attr("value").unwrap_or("");
+                if let Some(f) = super::props::numbers_fault(v) {
+                    return Err(doc.err_attr(op, "value", f));
+                }
                 match numbers(v) {
                     Some(n) if n.len() == 16 && n.iter().all(|x| x.is_finite()) => {
                         // Row-major in the file.
@@ -78,12 +81,18 @@ pub fn parse_transform(doc: &Document, e: &Elem) -> Result<Mat4> {
                             format!("<lookat> needs origin, target and up; '{a}' is missing"),
                         )
                     })?;
+                    if let Some(f) = super::props::numbers_fault(v) {
+                        return Err(doc.err_attr(op, a, format!("'{a}': {f}")));
+                    }
                     match numbers(v).as_deref() {
                         Some([x, y, z]) => Ok(Vec3::new(*x, *y, *z)),
                         _ => Err(doc.err_attr(
                             op,
                             a,
-                            format!("'{a}': expected 'x, y, z', found '{v}'"),
+                            format!(
+                                "'{a}': expected 'x, y, z', found '{}'",
+                                crate::input::shorten(v)
+                            ),
                         )),
                     }
                 };
