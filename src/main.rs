@@ -965,12 +965,11 @@ fn render_sppm(
         let secs = stats.elapsed.as_secs_f64().max(1e-9);
         let rays = stats.rays.rays + stats.rays.shadow_rays;
         eprintln!(
-            "{}: {}x{} at {} {} ({}, {} primitives, {} lights, loaded in {:.2} s) in {:.2} s: {:.2} M samples/s, {:.2} M rays/s ({:.2} M shadow rays/s)",
+            "{}: {}x{} at {} iterations ({}, {} primitives, {} lights, loaded in {:.2} s) in {:.2} s: {:.2} M samples/s, {:.2} M rays/s ({:.2} M shadow rays/s)",
             output.display(),
             fw,
             fh,
             passes,
-            "iterations",
             settings.params.kind.name(),
             scene.prim_count(),
             scene.lights.lights.len() + scene.lights.others.len(),

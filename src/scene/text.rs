@@ -35,17 +35,6 @@ impl<'a> Iterator for Fields<'a> {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::Fields;
-
-    #[test]
-    fn columns_count_characters() {
-        let f: Vec<_> = Fields::new("  é 1/2  ü\tx").collect();
-        assert_eq!(f, vec![(3, "é"), (5, "1/2"), (10, "ü"), (12, "x")]);
-    }
-}
-
 /// Why a number read as f64 does not fit the f32 every scene number becomes: beyond f32's
 /// range it would become infinite (and be refused as "not finite" or "not positive", which it
 /// was not), too small it would round to 0. None when it fits (or is not finite: the caller
@@ -61,5 +50,16 @@ pub fn f32_fault(v: f64) -> Option<String> {
         ))
     } else {
         None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Fields;
+
+    #[test]
+    fn columns_count_characters() {
+        let f: Vec<_> = Fields::new("  é 1/2  ü\tx").collect();
+        assert_eq!(f, vec![(3, "é"), (5, "1/2"), (10, "ü"), (12, "x")]);
     }
 }
