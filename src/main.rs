@@ -49,27 +49,30 @@ enum Command {
     Denoise(DenoiseArgs),
 }
 
+/// The photon-mapping integrators' defaults, which the flags show.
+const PHOTON_DEFAULTS: mcrt::integrator::PhotonParams = mcrt::integrator::PhotonParams::DEFAULT;
+
 /// Settings of the photon-mapping integrators.
 #[derive(clap::Args, Clone)]
 struct PhotonArgs {
     /// photon: photons emitted for the global map.
-    #[arg(long, value_name = "N", default_value_t = 200_000)]
+    #[arg(long, value_name = "N", default_value_t = PHOTON_DEFAULTS.photons)]
     photons: u64,
     /// photon: photons emitted for the caustic map (those that reach a diffuse surface by
     /// mirrors and glass only are kept).
-    #[arg(long, value_name = "N", default_value_t = 1_000_000)]
+    #[arg(long, value_name = "N", default_value_t = PHOTON_DEFAULTS.caustic_photons)]
     caustic_photons: u64,
     /// photon: photons in each radiance estimate (k nearest, cone filter).
-    #[arg(long, value_name = "K", default_value_t = 64)]
+    #[arg(long, value_name = "K", default_value_t = PHOTON_DEFAULTS.gather_photons)]
     gather_photons: u32,
     /// photon: final-gather rays per camera sample (0: the global map seen directly).
-    #[arg(long, value_name = "N", default_value_t = 8)]
+    #[arg(long, value_name = "N", default_value_t = PHOTON_DEFAULTS.final_gather)]
     final_gather: u32,
     /// sppm: iterations (camera pass plus photon pass each).
-    #[arg(long, value_name = "N", default_value_t = 64)]
+    #[arg(long, value_name = "N", default_value_t = PHOTON_DEFAULTS.iterations)]
     iterations: u32,
     /// sppm: photons emitted per iteration.
-    #[arg(long, value_name = "N", default_value_t = 100_000)]
+    #[arg(long, value_name = "N", default_value_t = PHOTON_DEFAULTS.photons_per_iteration)]
     photons_per_iteration: u64,
     /// sppm: initial search radius in scene units (default: 1/200 of the scene's diagonal).
     #[arg(long, value_name = "R")]
@@ -78,40 +81,7 @@ struct PhotonArgs {
 
 impl PhotonArgs {
     fn params(&self) -> Result<mcrt::integrator::PhotonParams, Error> {
-        use mcrt::limits::*;
-        for (flag, v, min, max) in [
-            ("--photons", self.photons, 0, MAX_PHOTONS),
-            ("--caustic-photons", self.caustic_photons, 0, MAX_PHOTONS),
-            (
-                "--gather-photons",
-                self.gather_photons as u64,
-                1,
-                MAX_GATHER_PHOTONS,
-            ),
-            (
-                "--final-gather",
-                self.final_gather as u64,
-                0,
-                MAX_FINAL_GATHER,
-            ),
-            ("--iterations", self.iterations as u64, 1, MAX_ITERATIONS),
-            (
-                "--photons-per-iteration",
-                self.photons_per_iteration,
-                1,
-                MAX_PHOTONS,
-            ),
-        ] {
-            check(flag, v, min, max).map_err(Error::Usage)?;
-        }
-        if let Some(r) = self.initial_radius {
-            if !(r > 0.0 && r.is_finite()) {
-                return Err(Error::Usage(format!(
-                    "--initial-radius must be positive, got {r}"
-                )));
-            }
-        }
-        Ok(mcrt::integrator::PhotonParams {
+        let p = mcrt::integrator::PhotonParams {
             photons: self.photons,
             caustic_photons: self.caustic_photons,
             gather_photons: self.gather_photons,
@@ -119,7 +89,9 @@ impl PhotonArgs {
             iterations: self.iterations,
             photons_per_iteration: self.photons_per_iteration,
             initial_radius: self.initial_radius,
-        })
+        };
+        p.check().map_err(Error::Usage)?;
+        Ok(p)
     }
 }
 

@@ -82,6 +82,14 @@ def render(
     adaptive: bool = False,
     aovs: None = None,
     progress: Progress = None,
+    backend: Optional[str] = None,
+    photons: Optional[int] = None,
+    caustic_photons: Optional[int] = None,
+    gather_photons: Optional[int] = None,
+    final_gather: Optional[int] = None,
+    iterations: Optional[int] = None,
+    photons_per_iteration: Optional[int] = None,
+    initial_radius: Optional[float] = None,
 ) -> FloatArray:
     """Renders; returns float32 linear RGB of shape (height, width, 3)."""
 
@@ -104,6 +112,14 @@ def render(
     adaptive: bool = False,
     aovs: Union[str, Sequence[AovName]],
     progress: Progress = None,
+    backend: Optional[str] = None,
+    photons: Optional[int] = None,
+    caustic_photons: Optional[int] = None,
+    gather_photons: Optional[int] = None,
+    final_gather: Optional[int] = None,
+    iterations: Optional[int] = None,
+    photons_per_iteration: Optional[int] = None,
+    initial_radius: Optional[float] = None,
 ) -> Dict[str, FloatArray]:
     """Renders with AOVs; returns {"image": ..., "albedo": ..., ...}."""
 

@@ -455,10 +455,13 @@ fn run_job(
 ///
 /// `progress` is a callable `f(done, total)` (samples; total None when unbounded), called
 /// about ten times a second from the calling thread, or True for a tqdm bar where tqdm is
-/// installed. Ctrl-C stops the render within a tile (photon tracing between chunks, sppm
+/// installed. `backend` ("auto", "scalar", "avx512", "avx2") and the photon integrators'
+/// `photons`, `caustic_photons`, `gather_photons`, `final_gather`, `iterations`,
+/// `photons_per_iteration` and `initial_radius` are the command's flags of the same names.
+/// Ctrl-C stops the render within a tile (photon tracing between chunks, sppm
 /// between iterations) and raises KeyboardInterrupt.
 #[pyfunction]
-#[pyo3(signature = (scene, *, spp=None, width=None, height=None, seed=None, integrator=None, time=None, threads=None, sampler=None, max_depth=None, shadow_rays=None, camera=None, target_noise=None, adaptive=false, aovs=None, progress=None))]
+#[pyo3(signature = (scene, *, spp=None, width=None, height=None, seed=None, integrator=None, time=None, threads=None, sampler=None, max_depth=None, shadow_rays=None, camera=None, target_noise=None, adaptive=false, aovs=None, progress=None, backend=None, photons=None, caustic_photons=None, gather_photons=None, final_gather=None, iterations=None, photons_per_iteration=None, initial_radius=None))]
 #[allow(clippy::too_many_arguments)]
 fn render<'py>(
     py: Python<'py>,
@@ -478,6 +481,14 @@ fn render<'py>(
     adaptive: bool,
     aovs: Option<&Bound<'py, PyAny>>,
     progress: Option<&Bound<'py, PyAny>>,
+    backend: Option<String>,
+    photons: Option<u64>,
+    caustic_photons: Option<u64>,
+    gather_photons: Option<u32>,
+    final_gather: Option<u32>,
+    iterations: Option<u32>,
+    photons_per_iteration: Option<u64>,
+    initial_radius: Option<f32>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let (arc, path) = match scene.cast::<PyScene>() {
         Ok(s) => (s.get().scene.clone(), s.get().path.clone()),
@@ -489,7 +500,7 @@ fn render<'py>(
             (s.scene, s.path)
         }
     };
-    let req = request(
+    let mut req = request(
         spp,
         width,
         height,
@@ -501,6 +512,24 @@ fn render<'py>(
         shadow_rays,
         camera,
     )?;
+    let d = PhotonParams::DEFAULT;
+    req.photon = PhotonParams {
+        photons: photons.unwrap_or(d.photons),
+        caustic_photons: caustic_photons.unwrap_or(d.caustic_photons),
+        gather_photons: gather_photons.unwrap_or(d.gather_photons),
+        final_gather: final_gather.unwrap_or(d.final_gather),
+        iterations: iterations.unwrap_or(d.iterations),
+        photons_per_iteration: photons_per_iteration.unwrap_or(d.photons_per_iteration),
+        initial_radius: initial_radius.or(d.initial_radius),
+    };
+    req.photon.check().map_err(usage)?;
+    if let Some(name) = backend.as_deref() {
+        req.backend = mcrt::render::Backend::parse(name).ok_or_else(|| {
+            usage(format!(
+                "unknown backend '{name}' (known: auto, scalar, avx512, avx2)"
+            ))
+        })?;
+    }
     let time = time.map(duration).transpose()?;
     let aovs = aovs.map(aov_list).transpose()?.unwrap_or_default();
     let want_dict = !aovs.is_empty();

@@ -71,6 +71,12 @@ def test_render_equals_cli_exr_bit_for_bit(tmp_path):
         (dict(max_depth=2, shadow_rays=2, threads=1), ["--max-depth", 2, "--shadow-rays", 2, "--threads", 1]),
         (dict(max_depth=-1, spp=3), ["--max-depth", -1, "--spp", 3]),
         (dict(integrator="photon", spp=1), ["--integrator", "photon", "--spp", 1]),
+        (dict(integrator="photon", photons=3000, caustic_photons=2000, final_gather=2),
+         ["--integrator", "photon", "--photons", 3000, "--caustic-photons", 2000,
+          "--final-gather", 2]),
+        (dict(integrator="sppm", iterations=3, photons_per_iteration=2000),
+         ["--integrator", "sppm", "--iterations", 3, "--photons-per-iteration", 2000]),
+        (dict(backend="scalar"), ["--backend", "scalar"]),
     ],
 )
 def test_settings_equal_cli_flags(tmp_path, kwargs, flags):
@@ -161,6 +167,8 @@ def test_xml_error_and_missing_file(tmp_path):
         (dict(width=0), ["--width", 0]),
         (dict(camera="nope"), ["--camera", "nope"]),
         (dict(target_noise=-1.0), ["--target-noise=-1"]),
+        (dict(photons=10**10), ["--photons", 10**10]),
+        (dict(gather_photons=0), ["--gather-photons", 0]),
     ],
 )
 def test_bad_settings_raise_the_cli_message(tmp_path, kwargs, flags):
@@ -170,7 +178,8 @@ def test_bad_settings_raise_the_cli_message(tmp_path, kwargs, flags):
 
 
 def test_bad_names_raise_usage_errors():
-    for kwargs in [dict(integrator="bogus"), dict(sampler="bogus"), dict(aovs="albedo,bogus")]:
+    for kwargs in [dict(integrator="bogus"), dict(sampler="bogus"), dict(aovs="albedo,bogus"),
+                   dict(backend="bogus")]:
         with pytest.raises(mcrt.UsageError):
             mcrt.render(CORNELL, spp=1, width=4, height=4, **kwargs)
     with pytest.raises(mcrt.UsageError):

@@ -118,17 +118,59 @@ pub struct PhotonParams {
     pub initial_radius: Option<f32>,
 }
 
+impl PhotonParams {
+    /// The defaults (a constant, so the command's flags can show them).
+    pub const DEFAULT: PhotonParams = PhotonParams {
+        photons: 200_000,
+        caustic_photons: 1_000_000,
+        gather_photons: 64,
+        final_gather: 8,
+        iterations: 64,
+        photons_per_iteration: 100_000,
+        initial_radius: None,
+    };
+
+    /// Refuses counts beyond [`crate::limits`] and a radius that is not a positive number,
+    /// naming the command's flag.
+    pub fn check(&self) -> Result<(), String> {
+        use crate::limits::*;
+        for (flag, v, min, max) in [
+            ("--photons", self.photons, 0, MAX_PHOTONS),
+            ("--caustic-photons", self.caustic_photons, 0, MAX_PHOTONS),
+            (
+                "--gather-photons",
+                self.gather_photons as u64,
+                1,
+                MAX_GATHER_PHOTONS,
+            ),
+            (
+                "--final-gather",
+                self.final_gather as u64,
+                0,
+                MAX_FINAL_GATHER,
+            ),
+            ("--iterations", self.iterations as u64, 1, MAX_ITERATIONS),
+            (
+                "--photons-per-iteration",
+                self.photons_per_iteration,
+                1,
+                MAX_PHOTONS,
+            ),
+        ] {
+            check(flag, v, min, max)?;
+        }
+        match self.initial_radius {
+            Some(r) if !(r > 0.0 && r.is_finite()) => {
+                Err(format!("--initial-radius must be positive, got {r}"))
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
 impl Default for PhotonParams {
     fn default() -> Self {
-        PhotonParams {
-            photons: 200_000,
-            caustic_photons: 1_000_000,
-            gather_photons: 64,
-            final_gather: 8,
-            iterations: 64,
-            photons_per_iteration: 100_000,
-            initial_radius: None,
-        }
+        PhotonParams::DEFAULT
     }
 }
 
