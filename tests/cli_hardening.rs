@@ -52,6 +52,17 @@ fn run_within(args: &[&OsStr], limit: Duration, what: &str) -> Output {
     wait_within(spawn(args), limit, what)
 }
 
+/// `mcrt render SCENE -o OUT`, ended if it runs over 30 s.
+fn render_within(scene: &Path, out: &Path, what: &str) -> Output {
+    let args = [
+        "render".as_ref(),
+        scene.as_os_str(),
+        "-o".as_ref(),
+        out.as_os_str(),
+    ];
+    run_within(&args, Duration::from_secs(30), what)
+}
+
 fn os(v: &[&str]) -> Vec<std::ffi::OsString> {
     v.iter().map(|s| s.into()).collect()
 }
@@ -86,16 +97,7 @@ fn deeply_nested_xml_is_refused_without_overflow() {
     );
     let scene = dir.write("nest.xml", &text);
     let out = dir.path().join("o.png");
-    let o = run_within(
-        &[
-            "render".as_ref(),
-            scene.as_os_str(),
-            "-o".as_ref(),
-            out.as_os_str(),
-        ],
-        Duration::from_secs(30),
-        "nested XML",
-    );
+    let o = render_within(&scene, &out, "nested XML");
     refused(&o, &["nest.xml:1:", "nested more than 64 deep"], Some(&out));
 }
 
@@ -115,16 +117,7 @@ fn long_include_chain_is_refused() {
     }
     let out = dir.path().join("o.png");
     let scene = dir.path().join("inc0.xml");
-    let o = run_within(
-        &[
-            "render".as_ref(),
-            scene.as_os_str(),
-            "-o".as_ref(),
-            out.as_os_str(),
-        ],
-        Duration::from_secs(30),
-        "include chain",
-    );
+    let o = render_within(&scene, &out, "include chain");
     refused(&o, &["nested more than"], Some(&out));
 }
 
@@ -145,16 +138,7 @@ fn many_includes_of_one_file_are_bounded() {
     }
     let out = dir.path().join("o.png");
     let scene = dir.path().join("f0.xml");
-    let o = run_within(
-        &[
-            "render".as_ref(),
-            scene.as_os_str(),
-            "-o".as_ref(),
-            out.as_os_str(),
-        ],
-        Duration::from_secs(30),
-        "include fan-out",
-    );
+    let o = render_within(&scene, &out, "include fan-out");
     refused(&o, &["files included in all"], Some(&out));
 }
 

@@ -465,26 +465,29 @@ fn forge_next(ck: &Path, add: u32) {
 /// 600-character strings).
 #[test]
 fn forged_or_mismatched_checkpoints_are_refused() {
+    let resume = |scene: &Path, out: &Path, ck: &Path| {
+        run(&args(&[
+            &"render",
+            &scene,
+            &"-o",
+            &out,
+            &"--resume",
+            &ck,
+            &"--spp",
+            &"8",
+            &"--width",
+            &"8",
+            &"--height",
+            &"8",
+            &"-q",
+        ]))
+    };
     let dir = TempDir::new("forged");
     let scene = dir.write("s.toml", &scene_toml("0.5", ""));
     let (out, ck) = render_with_checkpoint(&dir, &scene, &[]);
     forge_next(&ck, 3);
     std::fs::remove_file(&out).unwrap();
-    let o = run(&args(&[
-        &"render",
-        &scene,
-        &"-o",
-        &out,
-        &"--resume",
-        &ck,
-        &"--spp",
-        &"8",
-        &"--width",
-        &"8",
-        &"--height",
-        &"8",
-        &"-q",
-    ]));
+    let o = resume(&scene, &out, &ck);
     refused(&o, &["ck.exr", "checksum"], &out);
 
     // Written with a valid checksum, but the channel disagrees with the metadata.
@@ -493,21 +496,7 @@ fn forged_or_mismatched_checkpoints_are_refused() {
     more[0].iter_mut().for_each(|n| *n += 3);
     mcrt::parts::write_part_with(&ck, &part, &[("next", &more[0])]).unwrap();
     std::fs::remove_file(&out).unwrap();
-    let o = run(&args(&[
-        &"render",
-        &scene,
-        &"-o",
-        &out,
-        &"--resume",
-        &ck,
-        &"--spp",
-        &"8",
-        &"--width",
-        &"8",
-        &"--height",
-        &"8",
-        &"-q",
-    ]));
+    let o = resume(&scene, &out, &ck);
     refused(&o, &["ck.exr", "'next' channel holds 5 to 5 samples"], &out);
 
     let (out, ck) = render_with_checkpoint(&dir, &scene, &["--shadow-rays", "1"]);

@@ -303,7 +303,7 @@ fn toml_defaults_of_the_new_materials_and_lights() {
 /// (mcrt's TOML default, unlike Mitsuba's XML).
 #[test]
 fn toml_microfacet_distribution() {
-    use mcrt::material::{Bsdf, MicrofacetType};
+    use mcrt::material::MicrofacetType;
     let d = parse(
         "[material.a]\ntype = \"roughconductor\"\n\n\
          [material.b]\ntype = \"roughconductor\"\ndistribution = \"beckmann\"\nalpha_u = 0.1\nalpha_v = 0.3\n\n\
@@ -315,12 +315,10 @@ fn toml_microfacet_distribution() {
         .materials
         .iter()
         .map(|m| {
-            let distr = match m.bsdf {
-                Bsdf::RoughConductor(b) => b.distr,
-                Bsdf::RoughDielectric(b) => b.distr,
-                Bsdf::RoughPlastic(b) => b.distr,
-                other => panic!("not rough: {other:?}"),
-            };
+            let distr = m
+                .bsdf
+                .microfacet()
+                .unwrap_or_else(|| panic!("not rough: {:?}", m.bsdf));
             (distr.kind, distr.alpha_u, distr.alpha_v)
         })
         .collect();

@@ -309,19 +309,16 @@ fn crop_window_equals_the_full_image_there() {
 
 /// The microfacet distribution of each rough BSDF of `body`, in order.
 fn distributions(tag: &str, body: &str) -> Vec<(mcrt::material::MicrofacetType, f32, f32)> {
-    use mcrt::material::Bsdf;
     let dir = TempDir::new(tag);
     let scene = dir.write("scene.xml", &scene_xml(body));
     let d = load_with(&scene, &[]).unwrap();
     d.materials
         .iter()
         .map(|m| {
-            let distr = match m.bsdf {
-                Bsdf::RoughConductor(b) => b.distr,
-                Bsdf::RoughDielectric(b) => b.distr,
-                Bsdf::RoughPlastic(b) => b.distr,
-                other => panic!("not rough: {other:?}"),
-            };
+            let distr = m
+                .bsdf
+                .microfacet()
+                .unwrap_or_else(|| panic!("not rough: {:?}", m.bsdf));
             (distr.kind, distr.alpha_u, distr.alpha_v)
         })
         .collect()

@@ -70,6 +70,18 @@ pub enum Bsdf {
     Black,
 }
 
+impl Bsdf {
+    /// The microfacet distribution of a rough BSDF.
+    pub fn microfacet(&self) -> Option<Microfacet> {
+        match self {
+            Bsdf::RoughConductor(b) => Some(b.distr),
+            Bsdf::RoughDielectric(b) => Some(b.distr),
+            Bsdf::RoughPlastic(b) => Some(b.distr),
+            _ => None,
+        }
+    }
+}
+
 /// A BSDF and how it treats the back side of a surface.
 #[derive(Clone, Copy, Debug)]
 pub struct Material {
