@@ -36,3 +36,15 @@ fn textures_meshes_and_includes() {
 fn beckmann_rough_bsdfs_by_default() {
     feature_matches_mitsuba("beckmann", 512, 4096);
 }
+
+/// A thinlens sensor: defocus in front of and behind the plane of focus.
+#[test]
+fn thinlens_sensor_defocus() {
+    feature_matches_mitsuba("cameras", 256, 4096);
+}
+
+/// An orthographic sensor whose to_world scale sets the view's extent.
+#[test]
+fn orthographic_sensor() {
+    feature_matches_mitsuba("orthographic", 256, 4096);
+}

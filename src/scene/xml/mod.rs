@@ -10,6 +10,7 @@
 mod document;
 mod objects;
 mod props;
+mod sensor;
 mod transform;
 
 use super::{SceneDesc, SceneError};
