@@ -3,7 +3,7 @@
 //! render` exit with status 2 and a message that names the file and says what is wrong (the
 //! fragment after `expect:` in the file's first lines), without a panic and without writing
 //! an output file. Meshes are rendered through a small scene that loads them (TOML for OBJ,
-//! Mitsuba XML for PLY).
+//! Mitsuba XML for PLY and serialized meshes).
 
 mod common;
 
@@ -40,6 +40,15 @@ fn check(name: &str) {
             &format!(
                 "<scene version=\"3.0.0\">\n<sensor type=\"perspective\"><float name=\"fov\" \
                  value=\"40\"/></sensor>\n<shape type=\"ply\"><string name=\"filename\" \
+                 value=\"{}\"/></shape>\n</scene>\n",
+                input.display()
+            ),
+        ),
+        Some("serialized") => dir.write(
+            "scene.xml",
+            &format!(
+                "<scene version=\"3.0.0\">\n<sensor type=\"perspective\"><float name=\"fov\" \
+                 value=\"40\"/></sensor>\n<shape type=\"serialized\"><string name=\"filename\" \
                  value=\"{}\"/></shape>\n</scene>\n",
                 input.display()
             ),
@@ -304,4 +313,71 @@ bad_input!(
 bad_input!(
     toml_rr_survival_one_minus_ulp_toml,
     "toml-rr-survival-one-minus-ulp.toml"
+);
+
+// Issue 25: cameras (thinlens, orthographic, focal_length), cylinder, serialized meshes,
+// flipped spheres.
+bad_input!(
+    serialized_bad_magic_serialized,
+    "serialized-bad-magic.serialized"
+);
+bad_input!(
+    serialized_corrupt_serialized,
+    "serialized-corrupt.serialized"
+);
+bad_input!(
+    serialized_index_out_of_range_serialized,
+    "serialized-index-out-of-range.serialized"
+);
+bad_input!(
+    serialized_truncated_serialized,
+    "serialized-truncated.serialized"
+);
+bad_input!(
+    serialized_version_5_serialized,
+    "serialized-version-5.serialized"
+);
+bad_input!(xml_bad_focal_length_xml, "xml-bad-focal-length.xml");
+bad_input!(xml_cylinder_zero_radius_xml, "xml-cylinder-zero-radius.xml");
+bad_input!(xml_cylinder_same_points_xml, "xml-cylinder-same-points.xml");
+bad_input!(xml_fov_and_focal_length_xml, "xml-fov-and-focal-length.xml");
+bad_input!(
+    xml_near_clip_beyond_far_clip_xml,
+    "xml-near-clip-beyond-far-clip.xml"
+);
+bad_input!(
+    xml_orthographic_flat_to_world_xml,
+    "xml-orthographic-flat-to-world.xml"
+);
+bad_input!(
+    xml_thinlens_negative_aperture_xml,
+    "xml-thinlens-negative-aperture.xml"
+);
+bad_input!(
+    xml_thinlens_without_aperture_xml,
+    "xml-thinlens-without-aperture.xml"
+);
+bad_input!(
+    xml_thinlens_zero_focus_distance_xml,
+    "xml-thinlens-zero-focus-distance.xml"
+);
+bad_input!(
+    xml_serialized_shape_index_out_of_range_xml,
+    "xml-serialized-shape-index-out-of-range.xml"
+);
+bad_input!(
+    xml_serialized_negative_shape_index_xml,
+    "xml-serialized-negative-shape-index.xml"
+);
+bad_input!(
+    xml_flipped_sphere_emitter_xml,
+    "xml-flipped-sphere-emitter.xml"
+);
+bad_input!(
+    toml_thinlens_negative_aperture_toml,
+    "toml-thinlens-negative-aperture.toml"
+);
+bad_input!(
+    toml_orthographic_zero_width_toml,
+    "toml-orthographic-zero-width.toml"
 );

@@ -48,3 +48,10 @@ fn thinlens_sensor_defocus() {
 fn orthographic_sensor() {
     feature_matches_mitsuba("orthographic", 256, 4096);
 }
+
+/// An open cylinder, a sphere with flip_normals, a rotated textured sphere and a serialized
+/// mesh.
+#[test]
+fn cylinder_flipped_and_rotated_spheres_serialized_mesh() {
+    feature_matches_mitsuba("shapes", 256, 4096);
+}

@@ -2,8 +2,8 @@
 //! spheres in BVH order, materials, and one area light per emissive triangle or sphere.
 
 use super::{
-    desc::GeometryDesc, desc::LightDesc, MeshAttrs, Scene, SceneDesc, META_ATTRS, META_EMITTER,
-    META_MATERIAL, SPHERE,
+    desc::GeometryDesc, desc::LightDesc, MeshAttrs, Scene, SceneDesc, SphereFrame, META_ATTRS,
+    META_EMITTER, META_MATERIAL, SPHERE,
 };
 use crate::accel::bvh::{self, PrimRef};
 use crate::accel::{huge_pages, BuildTimes};
@@ -27,6 +27,7 @@ impl Scene {
         let mut uvs = Vec::new();
         let mut attrs = Vec::new();
         let mut spheres = Vec::new();
+        let mut sphere_frames = Vec::new();
         let mut lights = Vec::new();
         // (primitive, light) of the emitting primitives, by primitive.
         let mut emitting: Vec<(u32, u32)> = Vec::new();
@@ -38,6 +39,8 @@ impl Scene {
             if emission.is_some() {
                 m |= META_EMITTER;
             }
+            // (centre, radius, frame) of a sphere, pushed after the match.
+            let mut sphere = None;
             match shape.geometry {
                 GeometryDesc::Mesh(mesh) => {
                     let base = positions.len() as u32;
@@ -114,18 +117,37 @@ impl Scene {
                     }
                 }
                 GeometryDesc::Sphere { center, radius } => {
-                    let s = Sphere {
-                        center: center.into(),
-                        radius,
-                    };
-                    if let Some(e) = emission {
-                        lights.push(AreaLight::new(LightShape::Sphere(s), e));
-                        emitting.push((tris.len() as u32, (lights.len() - 1) as u32));
-                    }
-                    tris.push([SPHERE, spheres.len() as u32, 0]);
-                    meta.push(m);
-                    spheres.push(s);
+                    sphere = Some((center, radius, SphereFrame::default()));
                 }
+                GeometryDesc::OrientedSphere {
+                    center,
+                    radius,
+                    rotation,
+                    flip,
+                } => {
+                    // (The loader refuses an emitting flipped sphere: its light would be
+                    // sampled with outward normals.)
+                    let frame = SphereFrame {
+                        to_local: (rotation != glam::Mat3::IDENTITY)
+                            .then(|| glam::Mat3A::from(rotation.transpose())),
+                        flip,
+                    };
+                    sphere = Some((center, radius, frame));
+                }
+            }
+            if let Some((center, radius, frame)) = sphere {
+                let s = Sphere {
+                    center: center.into(),
+                    radius,
+                };
+                if let Some(e) = emission {
+                    lights.push(AreaLight::new(LightShape::Sphere(s), e));
+                    emitting.push((tris.len() as u32, (lights.len() - 1) as u32));
+                }
+                tris.push([SPHERE, spheres.len() as u32, 0]);
+                meta.push(m);
+                spheres.push(s);
+                sphere_frames.push(frame);
             }
         }
         assert!(tris.len() < 1 << 27, "too many primitives");
@@ -203,6 +225,7 @@ impl Scene {
             meta,
             positions,
             spheres,
+            sphere_frames,
             #[cfg(target_arch = "x86_64")]
             flat,
             emitters,

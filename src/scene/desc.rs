@@ -9,7 +9,19 @@ use glam::Vec3;
 #[derive(Clone, Debug)]
 pub enum GeometryDesc {
     Mesh(TriangleMesh),
-    Sphere { center: Vec3, radius: f32 },
+    Sphere {
+        center: Vec3,
+        radius: f32,
+    },
+    /// A sphere with a frame of its own (Mitsuba's, set by `to_world`): `rotation` takes its
+    /// local axes, in which texture coordinates are (φ/2π, θ/π), to the world's; `flip`
+    /// turns its normals inwards (`flip_normals`).
+    OrientedSphere {
+        center: Vec3,
+        radius: f32,
+        rotation: glam::Mat3,
+        flip: bool,
+    },
 }
 
 #[derive(Clone, Debug)]
@@ -88,7 +100,7 @@ impl SceneDesc {
                     prims += m.indices.len();
                     vertices += m.positions.len();
                 }
-                GeometryDesc::Sphere { .. } => prims += 1,
+                GeometryDesc::Sphere { .. } | GeometryDesc::OrientedSphere { .. } => prims += 1,
             }
         }
         check_counts(prims, vertices, self.materials.len())

@@ -9,6 +9,7 @@ pub mod desc;
 pub mod error;
 pub mod obj;
 pub mod ply;
+pub mod serialized;
 pub mod text;
 pub mod toml;
 pub mod xml;
@@ -95,6 +96,15 @@ impl Interaction {
     }
 }
 
+/// A sphere's frame: its rotation from the world into its local axes, where its texture
+/// coordinates are measured (None: the world's), and whether its normals point inwards
+/// (Mitsuba's `flip_normals`).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct SphereFrame {
+    pub(crate) to_local: Option<glam::Mat3A>,
+    pub(crate) flip: bool,
+}
+
 pub struct Scene {
     /// Per primitive, in BVH order: a triangle's three indices into `positions`, or
     /// `[SPHERE, index into spheres, 0]`.
@@ -104,6 +114,8 @@ pub struct Scene {
     /// Vertex positions of all meshes, one after the other, and one padding vertex.
     pub(crate) positions: Vec<glam::Vec3>,
     pub(crate) spheres: Vec<Sphere>,
+    /// Per sphere (as `spheres`), its own frame and orientation.
+    pub(crate) sphere_frames: Vec<SphereFrame>,
     /// (primitive, area light) of each emitting primitive, by primitive.
     pub(crate) emitters: Vec<(u32, u32)>,
     /// Vertex normals and texture coordinates of the meshes that have them (a triangle's face
@@ -264,9 +276,12 @@ impl Scene {
             }
         } else {
             let s = &self.spheres[idx[1] as usize];
+            let frame = &self.sphere_frames[idx[1] as usize];
             let (p, n, p_err) = s.surface_point(ray.at(t_hit));
-            // The angles only where a texture reads them (an arctangent and an arccosine).
+            // The angles only where a texture reads them (an arctangent and an arccosine),
+            // in the sphere's own frame (Mitsuba's sphere.cpp).
             let uv = if self.materials[material as usize].texture.is_some() {
+                let n = frame.to_local.map_or(n, |m| m * n);
                 let phi = n.y.atan2(n.x);
                 let phi = if phi < 0.0 {
                     phi + std::f32::consts::TAU
@@ -280,6 +295,7 @@ impl Scene {
             } else {
                 Vec2::ZERO
             };
+            let n = if frame.flip { -n } else { n };
             Interaction {
                 p,
                 p_err,
@@ -406,6 +422,7 @@ impl Scene {
             + size_of_val(&self.meta[..])
             + size_of_val(&self.positions[..])
             + size_of_val(&self.spheres[..])
+            + size_of_val(&self.sphere_frames[..])
             + size_of_val(&self.emitters[..])
             + size_of_val(&self.normals[..])
             + size_of_val(&self.uvs[..])

@@ -256,8 +256,9 @@ impl<'a> Wavefront<'a> {
                 w.colour[c][j] = colour[c];
             }
             if idx[0] == SPHERE {
-                // (Emitting spheres are lights of their own: no scene here has one.)
-                if meta & META_EMITTER != 0 {
+                // (Emitting spheres are lights of their own: no scene here has one. The lanes'
+                // spheres face outwards.)
+                if meta & META_EMITTER != 0 || scene.sphere_frames[idx[1] as usize].flip {
                     return None;
                 }
                 let sphere = scene.spheres[idx[1] as usize];

@@ -572,6 +572,29 @@ impl<'a> Builder<'a> {
             )),
             "cube" => GeometryDesc::Mesh(cube(m, flip)),
             "disk" => GeometryDesc::Mesh(disk(m, flip)),
+            "cylinder" => {
+                let p0 = p.vec3_opt("p0")?.unwrap_or(Vec3::ZERO);
+                let p1 = p.vec3_opt("p1")?.unwrap_or(Vec3::Z);
+                let r = p.float("radius", 1.0)?;
+                let to_world = super::cylinder::cylinder_transform(m, p0, p1, r)
+                    .map_err(|why| self.doc.err(e, why))?;
+                let mut mesh = super::cylinder::unit_cylinder();
+                mesh.transform(&to_world);
+                if flip {
+                    flip_mesh(&mut mesh);
+                }
+                if self.lenient {
+                    self.warn(
+                        e,
+                        format!(
+                            "cylinder traced as a mesh of {} quads with exact normals \
+                             (--lenient)",
+                            super::cylinder::SEGMENTS
+                        ),
+                    );
+                }
+                GeometryDesc::Mesh(mesh)
+            }
             "sphere" => {
                 let c = p.vec3_opt("center")?.unwrap_or(Vec3::ZERO);
                 let r = p.float("radius", 1.0)?;
@@ -597,15 +620,22 @@ impl<'a> Builder<'a> {
                         "a sphere's to_world may only translate, rotate and scale uniformly",
                     ));
                 }
-                if flip {
-                    return Err(self.doc.err(e, "flip_normals on a sphere is not supported"));
-                }
-                GeometryDesc::Sphere {
-                    center: full.transform_point3(Vec3::ZERO),
-                    radius: s,
+                // The rotation of the sphere's frame: its unit axes (the columns over the
+                // scale); identity for spheres that only move and scale.
+                let rotation = glam::Mat3::from_cols(cols[0] / s, cols[1] / s, cols[2] / s);
+                let center = full.transform_point3(Vec3::ZERO);
+                if rotation == glam::Mat3::IDENTITY && !flip {
+                    GeometryDesc::Sphere { center, radius: s }
+                } else {
+                    GeometryDesc::OrientedSphere {
+                        center,
+                        radius: s,
+                        rotation,
+                        flip,
+                    }
                 }
             }
-            "obj" | "ply" => {
+            "obj" | "ply" | "serialized" => {
                 let name = p.string_opt("filename")?.ok_or_else(|| {
                     self.doc
                         .err(e, format!("a {kind} shape needs a 'filename'"))
@@ -627,8 +657,16 @@ impl<'a> Builder<'a> {
                         m.flip_v();
                     }
                     m
-                } else {
+                } else if kind == "ply" {
                     load_ply(&path)?.into_triangle_mesh()
+                } else {
+                    let index = p.int("shape_index", 0)?;
+                    let index = u32::try_from(index).map_err(|_| {
+                        self.doc
+                            .err(e, format!("shape_index must be ≥ 0, got {index}"))
+                    })?;
+                    crate::scene::serialized::load_serialized(&path, index)
+                        .map_err(|err| self.doc.err(e, err.to_string()))?
                 };
                 if mesh.indices.is_empty() {
                     return Err(self
@@ -652,8 +690,8 @@ impl<'a> Builder<'a> {
                     e,
                     "type",
                     format!(
-                        "shape '{kind}' is not supported; mcrt has obj, ply, rectangle, cube, \
-                         sphere and disk"
+                        "shape '{kind}' is not supported; mcrt has obj, ply, serialized, \
+                         rectangle, cube, sphere, disk and cylinder"
                     ),
                 ))
             }
@@ -687,6 +725,13 @@ impl<'a> Builder<'a> {
                         .err(obj, format!("<{tag}> cannot be nested in a <shape>")))
                 }
             }
+        }
+        if let (Some(_), GeometryDesc::OrientedSphere { flip: true, .. }) = (&emission, &geometry) {
+            return Err(self.doc.err(
+                e,
+                "an area emitter on a sphere with flip_normals is not supported (mcrt's \
+                 sphere lights emit outwards)",
+            ));
         }
         if let (Some(_), GeometryDesc::Mesh(m)) = (&emission, &geometry) {
             let area: f32 = m
