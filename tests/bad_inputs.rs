@@ -315,8 +315,7 @@ bad_input!(
     "toml-rr-survival-one-minus-ulp.toml"
 );
 
-// Issue 25: cameras (thinlens, orthographic, focal_length), cylinder, serialized meshes,
-// flipped spheres.
+// Issue 25: cameras (thinlens, orthographic, focal_length), cylinder, serialized meshes.
 bad_input!(
     serialized_bad_magic_serialized,
     "serialized-bad-magic.serialized"
@@ -368,10 +367,6 @@ bad_input!(
 bad_input!(
     xml_serialized_negative_shape_index_xml,
     "xml-serialized-negative-shape-index.xml"
-);
-bad_input!(
-    xml_flipped_sphere_emitter_xml,
-    "xml-flipped-sphere-emitter.xml"
 );
 bad_input!(
     toml_thinlens_negative_aperture_toml,

@@ -67,6 +67,14 @@ impl AreaLight {
         }
     }
 
+    /// This sphere light emitting towards its centre (Mitsuba's `flip_normals`): its sampled
+    /// points get inward normals. (Spheres keep +z in `normal` as the sign of theirs.)
+    pub fn inward(mut self) -> Self {
+        debug_assert!(matches!(self.shape, LightShape::Sphere(_)));
+        self.normal = -self.normal;
+        self
+    }
+
     /// The parallelogram light made of triangles `a` and `b` (one mesh, same emission), if
     /// they share an edge as the diagonal of a parallelogram and face the same way; within
     /// a relative 1e-6, far below what the image can show.
@@ -126,7 +134,8 @@ impl AreaLight {
                 let n = crate::material::sampling::square_to_uniform_sphere(u);
                 let p = s.center + n * s.radius;
                 let err = (s.center.abs() + (n * s.radius).abs()) * gamma(5);
-                (p, n, err)
+                // `normal.z` is −1 for a sphere that emits inwards ([`AreaLight::inward`]).
+                (p, n * self.normal.z, err)
             }
         }
     }

@@ -125,8 +125,6 @@ impl Scene {
                     rotation,
                     flip,
                 } => {
-                    // (The loader refuses an emitting flipped sphere: its light would be
-                    // sampled with outward normals.)
                     let frame = SphereFrame {
                         to_local: (rotation != glam::Mat3::IDENTITY)
                             .then(|| glam::Mat3A::from(rotation.transpose())),
@@ -141,7 +139,8 @@ impl Scene {
                     radius,
                 };
                 if let Some(e) = emission {
-                    lights.push(AreaLight::new(LightShape::Sphere(s), e));
+                    let light = AreaLight::new(LightShape::Sphere(s), e);
+                    lights.push(if frame.flip { light.inward() } else { light });
                     emitting.push((tris.len() as u32, (lights.len() - 1) as u32));
                 }
                 tris.push([SPHERE, spheres.len() as u32, 0]);

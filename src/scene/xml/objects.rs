@@ -726,13 +726,6 @@ impl<'a> Builder<'a> {
                 }
             }
         }
-        if let (Some(_), GeometryDesc::OrientedSphere { flip: true, .. }) = (&emission, &geometry) {
-            return Err(self.doc.err(
-                e,
-                "an area emitter on a sphere with flip_normals is not supported (mcrt's \
-                 sphere lights emit outwards)",
-            ));
-        }
         if let (Some(_), GeometryDesc::Mesh(m)) = (&emission, &geometry) {
             let area: f32 = m
                 .indices
