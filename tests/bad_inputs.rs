@@ -376,3 +376,7 @@ bad_input!(
     toml_orthographic_zero_width_toml,
     "toml-orthographic-zero-width.toml"
 );
+bad_input!(
+    toml_cylinder_same_points_toml,
+    "toml-cylinder-same-points.toml"
+);

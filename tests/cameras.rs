@@ -233,3 +233,31 @@ fn xml_thinlens_and_orthographic_parameters() {
         c => panic!("{c:?}"),
     }
 }
+
+/// The TOML format's thinlens and orthographic cameras.
+#[test]
+fn toml_thinlens_and_orthographic_cameras() {
+    let d = mcrt::scene::toml::parse_toml(
+        Path::new("t.toml"),
+        "[[camera]]\nname = \"lens\"\ntype = \"thinlens\"\norigin = [1, 2, 3]\n\
+         target = [1, 2, 0]\nup = [0, 1, 0]\nfov = 50\naperture_radius = 0.3\n\
+         focus_distance = 4\n\n[[camera]]\nname = \"plan\"\ntype = \"orthographic\"\n\
+         origin = [0, 1, 5]\ntarget = [0, 1, 0]\nup = [0, 1, 0]\nview_width = 4\n",
+    )
+    .unwrap();
+    let lens = d.cameras[0].1.build(64, 48);
+    let want = thin_lens(0.3, 4.0).build(64, 48);
+    let mut rng = Sampler::from_state(5, 6);
+    for _ in 0..16 {
+        let (u, l) = (rng.next_2d(), rng.next_2d());
+        let (a, b) = (
+            lens.generate_ray_lens(3, 4, u, l),
+            want.generate_ray_lens(3, 4, u, l),
+        );
+        assert_eq!((a.o, a.d), (b.o, b.d));
+    }
+    let plan = d.cameras[1].1.build(80, 40);
+    let tl = plan.generate_ray(0, 0, Vec2::ZERO);
+    assert_eq!(tl.o, Vec3A::new(-2.0, 2.0, 5.0));
+    assert_eq!(tl.d, Vec3A::new(0.0, 0.0, -1.0));
+}

@@ -141,3 +141,38 @@ fn flipped_sphere_emitter_lights_its_inside() {
         assert!((px(x, y) - 1.0).abs() < 1e-6, "emitter {}", px(x, y));
     }
 }
+
+/// The TOML format's cylinder is the XML importer's, and its meshes may be serialized files
+/// (the first mesh, as Mitsuba's default shape_index).
+#[test]
+fn toml_cylinder_and_serialized_mesh_are_the_xml_ones() {
+    use mcrt::scene::GeometryDesc;
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mitsuba/features");
+    let toml = mcrt::scene::toml::parse_toml(
+        &dir.join("t.toml"),
+        "[[shape]]\ntype = \"cylinder\"\np0 = [1, 2, 3]\np1 = [2, 2, 5]\nradius = 0.3\n\n\
+         [[shape]]\ntype = \"mesh\"\nfile = \"mesh.serialized\"\n",
+    )
+    .unwrap();
+    let xml = mcrt::scene::xml::parse_xml(
+        &dir.join("t.xml"),
+        "<scene version=\"3.0.0\"><shape type=\"cylinder\"><point name=\"p0\" value=\"1, 2, 3\"/>\
+         <point name=\"p1\" value=\"2, 2, 5\"/><float name=\"radius\" value=\"0.3\"/></shape>\
+         <shape type=\"serialized\"><string name=\"filename\" value=\"mesh.serialized\"/>\
+         <boolean name=\"face_normals\" value=\"true\"/></shape></scene>",
+        &Default::default(),
+    )
+    .unwrap();
+    for (a, b) in toml.shapes.iter().zip(&xml.shapes) {
+        let (GeometryDesc::Mesh(a), GeometryDesc::Mesh(b)) = (&a.geometry, &b.geometry) else {
+            panic!("meshes expected");
+        };
+        assert_eq!(a.positions, b.positions);
+        assert_eq!(a.indices, b.indices);
+        assert_eq!(a.normals, b.normals);
+    }
+    let GeometryDesc::Mesh(tetra) = &toml.shapes[1].geometry else {
+        unreachable!()
+    };
+    assert_eq!((tetra.positions.len(), tetra.indices.len()), (4, 4));
+}

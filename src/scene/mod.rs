@@ -5,6 +5,7 @@
 //! materials and lights.
 
 pub mod build;
+pub mod cylinder;
 pub mod desc;
 pub mod error;
 pub mod obj;

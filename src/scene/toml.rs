@@ -168,6 +168,8 @@ struct ShapeT {
     center: Option<Spanned<V3>>,
     radius: Option<Spanned<f32>>,
     normal: Option<Spanned<V3>>,
+    p0: Option<Spanned<V3>>,
+    p1: Option<Spanned<V3>>,
     file: Option<Spanned<String>>,
     positions: Option<Spanned<Vec<V3>>>,
     indices: Option<Spanned<Vec<[u32; 3]>>>,
@@ -663,6 +665,8 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
             ("center", span_of(&s.center)),
             ("radius", span_of(&s.radius)),
             ("normal", span_of(&s.normal)),
+            ("p0", span_of(&s.p0)),
+            ("p1", span_of(&s.p1)),
             ("file", span_of(&s.file)),
             ("positions", span_of(&s.positions)),
             ("indices", span_of(&s.indices)),
@@ -739,6 +743,18 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                 disk.transform(&m);
                 GeometryDesc::Mesh(disk)
             }
+            "cylinder" => {
+                let what = "a cylinder";
+                cx.only(&present, &["p0", "p1", "radius"], what)?;
+                let p0 = cx.finite3(cx.need(&s.p0, "p0", what, &at)?, "p0")?;
+                let p1 = cx.finite3(cx.need(&s.p1, "p1", what, &at)?, "p1")?;
+                let r = cx.need(&s.radius, "radius", what, &at)?;
+                let m = crate::scene::cylinder::cylinder_transform(Mat4::IDENTITY, p0, p1, *r.get_ref())
+                    .or_else(|why| cx.err(at.clone(), why))?;
+                let mut mesh = crate::scene::cylinder::unit_cylinder();
+                mesh.transform(&m);
+                GeometryDesc::Mesh(mesh)
+            }
             "mesh" => {
                 cx.only(
                     &present,
@@ -759,11 +775,12 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                             .and_then(|e| e.to_str())
                             .unwrap_or("")
                             .to_ascii_lowercase();
-                        if ext != "obj" && ext != "ply" {
+                        if ext != "obj" && ext != "ply" && ext != "serialized" {
                             return cx.err(
                                 f.span(),
                                 format!(
-                                    "unsupported mesh file '{}' (expected an .obj or .ply file)",
+                                    "unsupported mesh file '{}' (expected an .obj or .ply file, \
+                                     or Mitsuba's .serialized)",
                                     f.get_ref()
                                 ),
                             );
@@ -782,8 +799,11 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                             let mut m = load_obj(&p)?;
                             m.flip_v();
                             m
-                        } else {
+                        } else if ext == "ply" {
                             load_ply(&p)?.into_triangle_mesh()
+                        } else {
+                            // The file's first mesh (Mitsuba's default shape_index).
+                            crate::scene::serialized::load_serialized(&p, 0)?
                         };
                         match s.smooth.as_ref().map(|v| *v.get_ref()) {
                             Some(true) if m.normals.is_none() => m.recompute_vertex_normals(),
@@ -872,7 +892,7 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                 return cx.err(
                     s.kind.span(),
                     format!(
-                    "unknown shape type '{other}' (expected triangle, quad, sphere, disk or mesh)"
+                    "unknown shape type '{other}' (expected triangle, quad, sphere, disk, cylinder or mesh)"
                 ),
                 )
             }

@@ -7,7 +7,6 @@
 //! `twosided`, front-only area emitters, `max_depth` counting path segments. Every property an
 //! object does not use is an error (as in Mitsuba), so typos do not pass silently.
 
-mod cylinder;
 mod document;
 mod objects;
 mod props;

@@ -576,9 +576,9 @@ impl<'a> Builder<'a> {
                 let p0 = p.vec3_opt("p0")?.unwrap_or(Vec3::ZERO);
                 let p1 = p.vec3_opt("p1")?.unwrap_or(Vec3::Z);
                 let r = p.float("radius", 1.0)?;
-                let to_world = super::cylinder::cylinder_transform(m, p0, p1, r)
+                let to_world = crate::scene::cylinder::cylinder_transform(m, p0, p1, r)
                     .map_err(|why| self.doc.err(e, why))?;
-                let mut mesh = super::cylinder::unit_cylinder();
+                let mut mesh = crate::scene::cylinder::unit_cylinder();
                 mesh.transform(&to_world);
                 if flip {
                     flip_mesh(&mut mesh);
@@ -589,7 +589,7 @@ impl<'a> Builder<'a> {
                         format!(
                             "cylinder traced as a mesh of {} quads with exact normals \
                              (--lenient)",
-                            super::cylinder::SEGMENTS
+                            crate::scene::cylinder::SEGMENTS
                         ),
                     );
                 }

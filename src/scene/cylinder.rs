@@ -1,5 +1,6 @@
-//! Mitsuba's `cylinder` shape (src/shapes/cylinder.cpp): the open tube of radius `radius`
-//! from `p0` to `p1`, then `to_world`; normals point outwards unless `flip_normals`.
+//! Mitsuba's `cylinder` shape (src/shapes/cylinder.cpp), also the TOML format's: the open
+//! tube of radius `radius` from `p0` to `p1`, then `to_world`; normals point outwards unless
+//! `flip_normals`.
 //!
 //! mcrt traces it as a mesh: [`SEGMENTS`] quads around the axis whose vertex normals are the
 //! exact radial normals, so shading is smooth; the polygon's circumradius is enlarged so its
