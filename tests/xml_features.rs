@@ -36,3 +36,10 @@ fn textures_meshes_and_includes() {
 fn beckmann_rough_bsdfs_by_default() {
     feature_matches_mitsuba("beckmann", 512, 4096);
 }
+
+/// `spot`: default and given beam widths (linear falloff between beam and cutoff), a
+/// projected PNG texture, frames by lookat and by rotations.
+#[test]
+fn spot_emitters() {
+    feature_matches_mitsuba("spot", 256, 4096);
+}

@@ -775,12 +775,14 @@ impl<'a> Builder<'a> {
             "constant" => LightDesc::Constant {
                 radiance: p.color("radiance", Color::ONE)?,
             },
+            "spot" => super::emitters::spot(self.doc, e, &p, &mut |t| self.texture(t))?,
+            "envmap" => super::emitters::envmap(self.doc, e, &p)?,
             "area" => return Err(self.doc.err(e, "an area emitter must be nested in a <shape>")),
             _ => {
                 return Err(self.doc.err_attr(
                     e,
                     "type",
-                    format!("emitter '{kind}' is not supported; mcrt has area, point, directional and constant"),
+                    format!("emitter '{kind}' is not supported; mcrt has area, point, directional, constant, spot and envmap"),
                 ))
             }
         };
