@@ -36,3 +36,10 @@ fn textures_meshes_and_includes() {
 fn beckmann_rough_bsdfs_by_default() {
     feature_matches_mitsuba("beckmann", 512, 4096);
 }
+
+/// `normalmap` on a rectangle, `bumpmap` on a sphere, and a `mask` with a bitmap opacity in
+/// front of an area light (shadow rays through it).
+#[test]
+fn normal_bump_maps_and_masks() {
+    feature_matches_mitsuba("maps-mask", 512, 4096);
+}

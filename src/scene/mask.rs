@@ -75,3 +75,108 @@ pub fn hash_unit(ray: &Ray, prim: usize) -> f32 {
     h = mix64(h ^ prim as u64);
     (h >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::{ShadowPacket, PACKET};
+    use glam::Vec3A;
+
+    /// A masked unit quad (z = 0) of opacity `opacity` (XML) in front of an opaque one
+    /// (z = −1), both facing +z.
+    fn scene(opacity: &str) -> Scene {
+        let xml = format!(
+            "<scene version=\"3.0.0\">\
+             <shape type=\"rectangle\"><bsdf type=\"mask\">{opacity}<bsdf type=\"diffuse\"/>\
+             </bsdf></shape>\
+             <shape type=\"rectangle\"><transform name=\"to_world\"><translate z=\"-1\"/>\
+             </transform></shape></scene>"
+        );
+        let desc = crate::scene::xml::parse_xml(
+            std::path::Path::new("mask.xml"),
+            &xml,
+            &Default::default(),
+        )
+        .unwrap();
+        Scene::build(desc)
+    }
+
+    /// Rays from z = 5 to points spread over the quads (a fixed low-discrepancy set).
+    fn rays(n: usize) -> impl Iterator<Item = Ray> {
+        (0..n).map(move |k| {
+            let x = (k as f32 + 0.5) / n as f32 * 1.8 - 0.9;
+            let y = ((k as f32 * 0.618_034).fract()) * 1.8 - 0.9;
+            let o = Vec3A::new(0.1, -0.2, 5.0);
+            Ray::new(o, Vec3A::new(x, y, 0.0) - o)
+        })
+    }
+
+    /// (Fraction of rays whose closest hit is the masked quad, fraction blocked before the
+    /// opaque one, fraction blocked in packets.)
+    fn seen_fractions(s: &Scene, n: usize) -> (f64, f64, f64) {
+        let (mut front, mut blocked, mut packed) = (0, 0, 0);
+        let all: Vec<Ray> = rays(n).collect();
+        for r in &all {
+            let si = s.intersect(r).expect("every ray hits a quad");
+            front += (si.p.z.abs() < 1e-3) as u32;
+            blocked += s.occluded(r, 1.1) as u32;
+        }
+        // The packets share an origin: all the rays above do.
+        for chunk in all.chunks(PACKET) {
+            let mut pk = ShadowPacket {
+                o: chunk[0].o,
+                d: [[0.0; PACKET]; 3],
+                t_max: [0.0; PACKET],
+            };
+            for (l, r) in chunk.iter().enumerate() {
+                for c in 0..3 {
+                    pk.d[c][l] = r.d[c];
+                }
+                pk.t_max[l] = 1.1;
+            }
+            let active = (1u32 << chunk.len()) - 1;
+            packed += s.occluded_packet(&pk, active).count_ones();
+        }
+        let n = n as f64;
+        (front as f64 / n, blocked as f64 / n, packed as f64 / n)
+    }
+
+    #[test]
+    fn opacity_zero_is_invisible_and_one_opaque() {
+        let s = scene("<float name=\"opacity\" value=\"0\"/>");
+        assert!(s.masked);
+        assert_eq!(seen_fractions(&s, 2000), (0.0, 0.0, 0.0));
+        // Opacity 1 is no mask at all.
+        let s = scene("<float name=\"opacity\" value=\"1\"/>");
+        assert!(!s.masked);
+        assert_eq!(seen_fractions(&s, 2000), (1.0, 1.0, 1.0));
+    }
+
+    #[test]
+    fn opacity_is_the_fraction_of_rays_that_see_the_surface() {
+        let s = scene("<float name=\"opacity\" value=\"0.3\"/>");
+        let n = 20_000;
+        let (front, blocked, packed) = seen_fractions(&s, n);
+        // Binomial noise: σ = √(α(1 − α)/n) ≈ 0.0032; five of them.
+        let tol = 5.0 * (0.3f64 * 0.7 / n as f64).sqrt();
+        for f in [front, blocked, packed] {
+            assert!((f - 0.3).abs() < tol, "{f} (tolerance {tol})");
+        }
+        // The same ray makes the same choice every time.
+        let again = seen_fractions(&s, n);
+        assert_eq!((front, blocked, packed), again);
+    }
+
+    #[test]
+    fn hash_is_uniform() {
+        let n = 100_000;
+        let mut bins = [0u32; 10];
+        for r in rays(n) {
+            bins[(hash_unit(&r, 7) * 10.0) as usize] += 1;
+        }
+        // χ² with 9 degrees of freedom: 27.9 is its 0.999 quantile.
+        let e = n as f64 / 10.0;
+        let chi2: f64 = bins.iter().map(|&b| (b as f64 - e).powi(2) / e).sum();
+        assert!(chi2 < 27.9, "{bins:?}: χ² = {chi2}");
+    }
+}
