@@ -43,3 +43,10 @@ fn beckmann_rough_bsdfs_by_default() {
 fn spot_emitters() {
     feature_matches_mitsuba("spot", 256, 4096);
 }
+
+/// `normalmap` on a rectangle, `bumpmap` on a sphere, and a `mask` with a bitmap opacity in
+/// front of an area light (shadow rays through it).
+#[test]
+fn normal_bump_maps_and_masks() {
+    feature_matches_mitsuba("maps-mask", 512, 4096);
+}

@@ -22,6 +22,8 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::Arc;
 
+mod wrappers;
+
 struct Builder<'a> {
     doc: &'a Document,
     ids: Ids<'a>,
@@ -514,6 +516,7 @@ impl<'a> Builder<'a> {
                 p.finish()?;
                 return self.bsdf(inner[0], true);
             }
+            "normalmap" | "bumpmap" | "mask" => return self.wrapper(e, &p, kind, two_sided),
             "diffuse" => {
                 let (c, t) = self.color_param(&p, "reflectance", 0.5)?;
                 texture = t;
@@ -584,7 +587,8 @@ impl<'a> Builder<'a> {
                     format!(
                         "bsdf '{kind}' is not supported; mcrt has diffuse, dielectric, \
                          thindielectric, roughdielectric, conductor, roughconductor, plastic, \
-                         roughplastic and twosided (--lenient renders it grey diffuse)"
+                         roughplastic, twosided, normalmap, bumpmap and mask (--lenient renders \
+                         it grey diffuse)"
                     ),
                 ));
             }
