@@ -220,7 +220,10 @@ fn seen_emission(scene: &Scene, ray: &crate::geometry::Ray) -> Color {
     match scene.intersect(ray) {
         Some(si) if si.light != crate::scene::NO_LIGHT => scene.lights.le(si.light, si.ng, -ray.d),
         Some(_) => Color::ZERO,
-        None => scene.lights.environment().map_or(Color::ZERO, |(le, _)| le),
+        None => scene
+            .lights
+            .environment(ray.d)
+            .map_or(Color::ZERO, |(le, _)| le),
     }
 }
 

@@ -261,3 +261,51 @@ fn toml_thinlens_and_orthographic_cameras() {
     assert_eq!(tl.o, Vec3A::new(-2.0, 2.0, 5.0));
     assert_eq!(tl.d, Vec3A::new(0.0, 0.0, -1.0));
 }
+
+/// The wavefront's lanes make pinhole rays only: it takes the Cornell box with its own
+/// camera, and declines it with a thin lens or an orthographic camera (whose samples the
+/// path tracer renders one at a time; a forced wide backend is refused).
+#[cfg(target_arch = "x86_64")]
+#[test]
+fn the_wavefront_declines_lens_and_orthographic_cameras() {
+    use mcrt::integrator::wavefront::Wavefront;
+    use mcrt::render::Backend;
+    use mcrt::scene::desc::FileSettings;
+    use mcrt::scene::Scene;
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.toml");
+    let mut desc = mcrt::load_scene(&path).unwrap();
+    let over = FileSettings {
+        width: Some(16),
+        height: Some(16),
+        spp: Some(2),
+        ..Default::default()
+    };
+    let s = mcrt::resolve_settings(&desc.settings, &over, None).unwrap();
+    if Wavefront::new(&Scene::build(desc.clone()), &s).is_none() {
+        eprintln!("this CPU has no wavefront backend: nothing to decline");
+        return;
+    }
+    let eye = Vec3::new(0.0, 0.0, 3.9);
+    for cam in [
+        CameraDesc::ThinLens {
+            origin: eye,
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            fov: 40.0,
+            fov_axis: FovAxis::X,
+            aperture_radius: 0.1,
+            focus_distance: 3.9,
+        },
+        CameraDesc::orthographic_look_at(eye, Vec3::ZERO, Vec3::Y, 2.0),
+    ] {
+        desc.cameras = vec![("main".into(), cam)];
+        let scene = Scene::build(desc.clone());
+        assert!(Wavefront::new(&scene, &s).is_none());
+        let forced = mcrt::render::RenderSettings {
+            backend: Backend::Avx2,
+            ..s.clone()
+        };
+        assert!(mcrt::render::render(&scene, &forced, &|_| {}).is_err());
+        assert!(mcrt::render::render(&scene, &s, &|_| {}).is_ok());
+    }
+}

@@ -93,7 +93,7 @@ pub fn li(
         let hidden = depth == 0 && p.hide_emitters;
         let Some(si) = scene.intersect(&ray) else {
             if !hidden {
-                l += beta * escaped(scene, prev, p.shadow_rays);
+                l += beta * escaped(scene, ray.d, prev, p.shadow_rays);
             }
             break;
         };

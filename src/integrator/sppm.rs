@@ -243,7 +243,7 @@ fn camera_path(
         segs += 1;
         let Some(si) = scene.intersect(&ray) else {
             if !(segs == 1 && p.hide_emitters) {
-                l += beta * super::escaped(scene, None, p.shadow_rays);
+                l += beta * super::escaped(scene, ray.d, None, p.shadow_rays);
             }
             return (l, None);
         };

@@ -235,7 +235,7 @@ impl<'a> Wavefront<'a> {
         for (j, &idx) in scene.tris.iter().enumerate() {
             let meta = scene.meta[j];
             let material = &scene.materials[(meta & META_MATERIAL) as usize];
-            if material.texture.is_some() {
+            if material.reads_uv() {
                 return None;
             }
             let (kind, colour) = match &material.bsdf {

@@ -21,6 +21,8 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::Arc;
 
+mod wrappers;
+
 struct Builder<'a> {
     doc: &'a Document,
     ids: Ids<'a>,
@@ -477,6 +479,7 @@ impl<'a> Builder<'a> {
                 p.finish()?;
                 return self.bsdf(inner[0], true);
             }
+            "normalmap" | "bumpmap" | "mask" => return self.wrapper(e, &p, kind, two_sided),
             "diffuse" => {
                 let (c, t) = self.color_param(&p, "reflectance", 0.5)?;
                 texture = t;
@@ -547,7 +550,8 @@ impl<'a> Builder<'a> {
                     format!(
                         "bsdf '{kind}' is not supported; mcrt has diffuse, dielectric, \
                          thindielectric, roughdielectric, conductor, roughconductor, plastic, \
-                         roughplastic and twosided (--lenient renders it grey diffuse)"
+                         roughplastic, twosided, normalmap, bumpmap and mask (--lenient renders \
+                         it grey diffuse)"
                     ),
                 ));
             }
@@ -776,12 +780,14 @@ impl<'a> Builder<'a> {
             "constant" => LightDesc::Constant {
                 radiance: p.color("radiance", Color::ONE)?,
             },
+            "spot" => super::emitters::spot(self.doc, e, &p, &mut |t| self.texture(t))?,
+            "envmap" => super::emitters::envmap(self.doc, e, &p)?,
             "area" => return Err(self.doc.err(e, "an area emitter must be nested in a <shape>")),
             _ => {
                 return Err(self.doc.err_attr(
                     e,
                     "type",
-                    format!("emitter '{kind}' is not supported; mcrt has area, point, directional and constant"),
+                    format!("emitter '{kind}' is not supported; mcrt has area, point, directional, constant, spot and envmap"),
                 ))
             }
         };
