@@ -349,6 +349,32 @@ mod tests {
         assert_eq!(octa.uvs.unwrap()[0], Vec2::new(1.0, 0.5));
     }
 
+    /// Double precision, and normals, texture coordinates and vertex colours (skipped).
+    #[test]
+    fn double_precision_with_every_attribute() {
+        let mut b = Vec::new();
+        b.extend_from_slice(&3u64.to_le_bytes());
+        b.extend_from_slice(&1u64.to_le_bytes());
+        let positions = [0.0f64, 0., 0., 2., 0., 0., 0., 2., 0.];
+        let normals = [0.0f64, 0., 2., 0., 0., 1., 0., 0., 1.];
+        let uvs = [0.0f64, 0., 1., 0., 0., 1.];
+        let colours = [0.5f64; 9];
+        for v in positions.iter().chain(&normals).chain(&uvs).chain(&colours) {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        for i in [0u32, 1, 2] {
+            b.extend_from_slice(&i.to_le_bytes());
+        }
+        let flags = DOUBLE_PRECISION | HAS_NORMALS | HAS_TEXCOORDS | HAS_COLORS;
+        for version in [3, 4] {
+            let m = parse_serialized(&file(version, &[mesh(version, flags, &b)]), 0).unwrap();
+            assert_eq!(m.positions[1], Vec3::new(2.0, 0.0, 0.0));
+            assert_eq!(m.normals.as_ref().unwrap()[0], Vec3::Z);
+            assert_eq!(m.uvs.as_ref().unwrap()[2], Vec2::Y);
+            assert_eq!(m.indices, vec![[0, 1, 2]]);
+        }
+    }
+
     /// The fuzz target's property on every cut and many byte changes of the test file:
     /// an answer, never a panic, and a mesh only with indices in range.
     #[test]
