@@ -248,7 +248,10 @@ fn unknown_light_type() {
         "light-type",
         "[[light]]\ntype = \"projector\"\nposition = [0, 1, 0]\n",
         loc("type = \"projector\"", "\"projector\""),
-        &["unknown light type 'projector'", "point, directional, spot, constant"],
+        &[
+            "unknown light type 'projector'",
+            "point, directional, spot, constant",
+        ],
     );
 }
 

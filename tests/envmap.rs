@@ -78,7 +78,7 @@ fn latitude_longitude_convention() {
 fn chi2_sampling_matches_pdf() {
     let rot = Mat3::from_rotation_x(0.7) * Mat3::from_rotation_y(-1.9);
     let env = EnvMap::new(&image(), 1.0, rot);
-    let to_local = Mat3::from(rot).transpose();
+    let to_local = rot.transpose();
     let (bu, bv) = (7usize, 9usize);
     let uv_of = |d: Vec3A| {
         let l = glam::Vec3::from(d);
@@ -276,4 +276,34 @@ fn hdr_files_load_as_bitmaps() {
         assert!((*a - *b).abs().max_element() <= a.max_element() / 100.0 + 1e-6);
     }
     let _ = Vec2::ZERO;
+}
+
+/// Photon mapping emits no photons from spot and envmap lights: `photon` and `sppm` refuse
+/// such scenes (exit status 2 through `Error::exit_code`) and name the light.
+#[test]
+fn photon_integrators_refuse_spot_and_envmap() {
+    use mcrt::integrator::IntegratorKind;
+    use mcrt::scene::desc::FileSettings;
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    for (file, kind) in [("spot.xml", "spot"), ("envmap.xml", "envmap")] {
+        let desc = mcrt::load_scene(&root.join("tests/data/mitsuba/features").join(file)).unwrap();
+        let fs = desc.settings.clone();
+        let scene = mcrt::scene::Scene::build(desc);
+        for integrator in [IntegratorKind::Photon, IntegratorKind::Sppm] {
+            let over = FileSettings {
+                integrator: Some(integrator),
+                spp: Some(1),
+                width: Some(8),
+                height: Some(8),
+                ..Default::default()
+            };
+            let s = mcrt::resolve_settings(&fs, &over, Some(1)).unwrap();
+            let Err(e) = mcrt::render::render(&scene, &s, &|_| {}) else {
+                panic!("{file} rendered with {integrator:?}");
+            };
+            let msg = e.to_string();
+            assert!(msg.contains(kind) && msg.contains("path"), "{msg}");
+            assert_eq!(mcrt::Error::Render(e).exit_code(), 2);
+        }
+    }
 }

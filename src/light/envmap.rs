@@ -58,7 +58,7 @@ pub fn fault(width: u32, height: u32, to_world: Mat3) -> Option<String> {
     }
     let s = to_world.determinant().abs().cbrt();
     let r = to_world * (1.0 / s);
-    if !(s.is_finite() && s > 0.0) || !(r.transpose() * r).abs_diff_eq(Mat3::IDENTITY, 1e-4) {
+    if !(s.is_finite() && s > 0.0 && (r.transpose() * r).abs_diff_eq(Mat3::IDENTITY, 1e-4)) {
         return Some(
             "an environment map's to_world must be a rotation (a uniform scale is ignored)".into(),
         );

@@ -456,6 +456,18 @@ impl Lights {
         self.distribution.pmf(id as usize) * dist2 / (cos_l * light.area)
     }
 
+    /// The kind of the first light that photon mapping cannot emit photons from and would
+    /// render with direct light only (a spot or an image environment), if any; point,
+    /// directional and constant lights are known to get shadow rays only
+    /// (docs/photon-mapping.md, "Limits").
+    pub fn without_photons(&self) -> Option<&'static str> {
+        self.others.iter().find_map(|o| match o {
+            OtherLight::Spot(_) => Some("spot"),
+            OtherLight::Envmap(_) => Some("envmap"),
+            _ => None,
+        })
+    }
+
     pub fn total_power(&self) -> f32 {
         self.lights.iter().map(|l| l.power()).sum()
     }
