@@ -307,3 +307,31 @@ fn photon_integrators_refuse_spot_and_envmap() {
         }
     }
 }
+
+/// Radiance HDR files with random bytes changed (header and data) and cut at random lengths
+/// decode or are refused, never panic; an accepted one has as many pixels as it claims. (A
+/// cheap stand-in for the `texture` fuzz target, whose corpus holds these files too.)
+#[test]
+fn mutated_hdr_files_never_panic() {
+    let img = image();
+    let good = mcrt::rgbe::encode(img.width, img.height, &img.pixels);
+    let mut rng = Rng::new(17);
+    let mut accepted = 0;
+    for _ in 0..20_000 {
+        let mut b = good.clone();
+        for _ in 0..1 + (rng.f() * 4.0) as usize {
+            let i = (rng.f() * b.len() as f32) as usize % b.len();
+            b[i] = (rng.f() * 256.0) as u8;
+        }
+        if rng.f() < 0.3 {
+            b.truncate((rng.f() * b.len() as f32) as usize);
+        }
+        if let Ok((w, h, px)) = mcrt::rgbe::decode(&b) {
+            assert_eq!(px.len() as u64, w as u64 * h as u64);
+            assert!(px.iter().all(|p| p.is_finite() && p.min_element() >= 0.0));
+            accepted += 1;
+        }
+    }
+    // Most changes hit pixel data, which stays decodable.
+    assert!(accepted > 1000, "{accepted}");
+}
