@@ -124,7 +124,7 @@ impl WrapMode {
 
     /// Wraps an integer pixel index into `[0, n)` (n ≥ 1).
     #[inline]
-    fn wrap(self, i: i64, n: i64) -> usize {
+    pub(crate) fn wrap(self, i: i64, n: i64) -> usize {
         (match self {
             WrapMode::Clamp => i.clamp(0, n - 1),
             WrapMode::Repeat => i.rem_euclid(n),

@@ -74,3 +74,22 @@ fn envmap_emitter_exr() {
     BlockComparison::new(&r, &reference("envmap.exr"), 8, 4096)
         .assert_within_noise("envmap.xml (EXR)");
 }
+
+/// `normalmap` on a rectangle, `bumpmap` on a sphere, and a `mask` with a bitmap opacity in
+/// front of an area light (shadow rays through it).
+#[test]
+fn normal_bump_maps_and_masks() {
+    feature_matches_mitsuba("maps-mask", 512, 4096);
+}
+
+/// A thinlens sensor: defocus in front of and behind the plane of focus.
+#[test]
+fn thinlens_sensor_defocus() {
+    feature_matches_mitsuba("cameras", 256, 4096);
+}
+
+/// An orthographic sensor whose to_world scale sets the view's extent.
+#[test]
+fn orthographic_sensor() {
+    feature_matches_mitsuba("orthographic", 256, 4096);
+}

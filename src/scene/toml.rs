@@ -103,6 +103,9 @@ struct CameraT {
     up: Option<Spanned<V3>>,
     fov: Option<Spanned<f32>>,
     fov_axis: Option<Spanned<String>>,
+    aperture_radius: Option<Spanned<f32>>,
+    focus_distance: Option<Spanned<f32>>,
+    view_width: Option<Spanned<f32>>,
 }
 
 #[derive(Deserialize)]
@@ -477,6 +480,9 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
             ("up", span_of(&c.up)),
             ("fov", span_of(&c.fov)),
             ("fov_axis", span_of(&c.fov_axis)),
+            ("aperture_radius", span_of(&c.aperture_radius)),
+            ("focus_distance", span_of(&c.focus_distance)),
+            ("view_width", span_of(&c.view_width)),
         ];
         let cd = match c.kind.get_ref().as_str() {
             "pinhole" => {
@@ -509,13 +515,27 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                         .transpose()?,
                 }
             }
-            "perspective" => {
-                let what = "a perspective camera";
-                cx.only(
-                    &present,
-                    &["origin", "target", "up", "fov", "fov_axis"],
-                    what,
-                )?;
+            "perspective" | "thinlens" => {
+                let thin = c.kind.get_ref() == "thinlens";
+                let what = if thin {
+                    "a thinlens camera"
+                } else {
+                    "a perspective camera"
+                };
+                let keys: &[&str] = if thin {
+                    &[
+                        "origin",
+                        "target",
+                        "up",
+                        "fov",
+                        "fov_axis",
+                        "aperture_radius",
+                        "focus_distance",
+                    ]
+                } else {
+                    &["origin", "target", "up", "fov", "fov_axis"]
+                };
+                cx.only(&present, keys, what)?;
                 let origin = cx.finite3(cx.need(&c.origin, "origin", what, &at)?, "origin")?;
                 let target = cx.finite3(cx.need(&c.target, "target", what, &at)?, "target")?;
                 let up = cx.finite3(cx.need(&c.up, "up", what, &at)?, "up")?;
@@ -535,18 +555,54 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                         Ok,
                     )?,
                 };
-                CameraDesc::Perspective {
-                    origin,
-                    target,
-                    up,
-                    fov: *fov.get_ref(),
-                    fov_axis,
+                let fov = *fov.get_ref();
+                if thin {
+                    let radius = cx.need(&c.aperture_radius, "aperture_radius", what, &at)?;
+                    if !(*radius.get_ref() >= 0.0 && radius.get_ref().is_finite()) {
+                        return cx.err(radius.span(), "'aperture_radius' must be a number ≥ 0");
+                    }
+                    let focus = cx.need(&c.focus_distance, "focus_distance", what, &at)?;
+                    if !(*focus.get_ref() > 0.0 && focus.get_ref().is_finite()) {
+                        return cx.err(focus.span(), "'focus_distance' must be a number > 0");
+                    }
+                    CameraDesc::ThinLens {
+                        origin,
+                        target,
+                        up,
+                        fov,
+                        fov_axis,
+                        aperture_radius: *radius.get_ref(),
+                        focus_distance: *focus.get_ref(),
+                    }
+                } else {
+                    CameraDesc::Perspective {
+                        origin,
+                        target,
+                        up,
+                        fov,
+                        fov_axis,
+                    }
                 }
+            }
+            "orthographic" => {
+                let what = "an orthographic camera";
+                cx.only(&present, &["origin", "target", "up", "view_width"], what)?;
+                let origin = cx.finite3(cx.need(&c.origin, "origin", what, &at)?, "origin")?;
+                let target = cx.finite3(cx.need(&c.target, "target", what, &at)?, "target")?;
+                let up = cx.finite3(cx.need(&c.up, "up", what, &at)?, "up")?;
+                let w = cx.need(&c.view_width, "view_width", what, &at)?;
+                if !(*w.get_ref() > 0.0 && w.get_ref().is_finite()) {
+                    return cx.err(w.span(), "'view_width' must be a number > 0");
+                }
+                CameraDesc::orthographic_look_at(origin, target, up, *w.get_ref())
             }
             other => {
                 return cx.err(
                     c.kind.span(),
-                    format!("unknown camera type '{other}' (expected 'pinhole' or 'perspective')"),
+                    format!(
+                        "unknown camera type '{other}' (expected 'pinhole', 'perspective', \
+                         'thinlens' or 'orthographic')"
+                    ),
                 )
             }
         };

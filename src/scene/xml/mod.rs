@@ -11,6 +11,7 @@ mod document;
 mod emitters;
 mod objects;
 mod props;
+mod sensor;
 mod transform;
 
 use super::{SceneDesc, SceneError};
