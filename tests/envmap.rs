@@ -302,7 +302,10 @@ fn photon_integrators_refuse_spot_and_envmap() {
                 panic!("{file} rendered with {integrator:?}");
             };
             let msg = e.to_string();
-            assert!(msg.contains(kind) && msg.contains("path"), "{msg}");
+            assert!(
+                msg.contains(kind) && msg.contains("path") && !msg.contains("  "),
+                "{msg}"
+            );
             assert_eq!(mcrt::Error::Render(e).exit_code(), 2);
         }
     }

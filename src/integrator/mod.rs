@@ -256,7 +256,9 @@ pub(crate) fn photons_from_every_light(
     match scene.lights.without_photons() {
         None => Ok(()),
         Some(kind) => Err(RenderError::Unsupported(format!(
-            "--integrator {} emits photons from area lights only; this scene's {kind} light              would light it directly but not by any bounce: render it with --integrator path              (or direct)",
+            "--integrator {} emits photons from area lights only; this scene's {kind} light \
+             would light it directly but not by any bounce: render it with --integrator path \
+             (or direct)",
             s.params.kind.name()
         ))),
     }
