@@ -93,3 +93,9 @@ fn thinlens_sensor_defocus() {
 fn orthographic_sensor() {
     feature_matches_mitsuba("orthographic", 256, 4096);
 }
+
+/// The envmap scene by `direct` (Mitsuba's: one emitter and one BSDF sample by MIS).
+#[test]
+fn envmap_emitter_direct_integrator() {
+    feature_matches_mitsuba("envmap-direct", 256, 4096);
+}
