@@ -234,7 +234,6 @@ pub fn prepare<'a>(
         }
         IntegratorKind::Photon => {
             no_lanes(s)?;
-            photons_from_every_light(scene, s)?;
             Box::new(photon::PhotonMapping::new(scene, s, stop)?)
         }
         IntegratorKind::Sppm => {
@@ -245,23 +244,6 @@ pub fn prepare<'a>(
             ))
         }
     })
-}
-
-/// Refuses photon mapping for a scene with a light that emits no photons (a spot or an
-/// envmap), which would light it directly only.
-pub(crate) fn photons_from_every_light(
-    scene: &Scene,
-    s: &RenderSettings,
-) -> Result<(), RenderError> {
-    match scene.lights.without_photons() {
-        None => Ok(()),
-        Some(kind) => Err(RenderError::Unsupported(format!(
-            "--integrator {} emits photons from area lights only; this scene's {kind} light \
-             would light it directly but not by any bounce: render it with --integrator path \
-             (or direct)",
-            s.params.kind.name()
-        ))),
-    }
 }
 
 /// Refuses a wide backend asked for an integrator that traces one path at a time.

@@ -78,7 +78,6 @@ pub fn render_sppm_until(
     stop: &(dyn Fn() -> bool + Sync),
 ) -> Result<(Film, RenderStats), RenderError> {
     let camera = crate::render::camera_for(scene, s)?;
-    super::photons_from_every_light(scene, s)?;
     let (ox, oy, fw, fh) = s.window();
     let pp = &s.params.photon;
     let r0 = pp.initial_radius.unwrap_or_else(|| default_radius(scene));

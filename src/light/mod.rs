@@ -152,7 +152,7 @@ pub enum OtherLight {
 impl OtherLight {
     /// Power, for choosing among lights; `radius` bounds the scene (pbrt-v4's convention
     /// for lights at infinity: the power that crosses a disk of that radius).
-    fn power(&self, radius: f32) -> f32 {
+    pub fn power(&self, radius: f32) -> f32 {
         let mean = |c: Color| (c.x + c.y + c.z) / 3.0;
         let disk = std::f32::consts::PI * radius * radius;
         match self {
@@ -454,18 +454,6 @@ impl Lights {
         }
         let light = &self.lights[id as usize];
         self.distribution.pmf(id as usize) * dist2 / (cos_l * light.area)
-    }
-
-    /// The kind of the first light that photon mapping cannot emit photons from and would
-    /// render with direct light only (a spot or an image environment), if any; point,
-    /// directional and constant lights are known to get shadow rays only
-    /// (docs/photon-mapping.md, "Limits").
-    pub fn without_photons(&self) -> Option<&'static str> {
-        self.others.iter().find_map(|o| match o {
-            OtherLight::Spot(_) => Some("spot"),
-            OtherLight::Envmap(_) => Some("envmap"),
-            _ => None,
-        })
     }
 
     pub fn total_power(&self) -> f32 {

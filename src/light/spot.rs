@@ -135,6 +135,11 @@ impl SpotLight {
     pub fn axis(&self) -> Vec3A {
         (self.to_world * Vec3A::Z).normalize()
     }
+
+    /// cos(cutoff_angle): no light leaves further off the axis (for a rotation frame).
+    pub fn cos_cutoff(&self) -> f32 {
+        self.cos_cutoff
+    }
 }
 
 #[cfg(test)]
