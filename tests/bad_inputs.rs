@@ -348,6 +348,8 @@ bad_input!(hdr_bad_orientation_hdr, "hdr-bad-orientation.hdr");
 bad_input!(hdr_run_too_long_hdr, "hdr-run-too-long.hdr");
 bad_input!(hdr_huge_size_hdr, "hdr-huge-size.hdr");
 bad_input!(hdr_xyze_format_hdr, "hdr-xyze-format.hdr");
+bad_input!(hdr_no_magic_hdr, "hdr-no-magic.hdr");
+bad_input!(hdr_header_not_ended_hdr, "hdr-header-not-ended.hdr");
 bad_input!(xml_envmap_missing_file_xml, "xml-envmap-missing-file.xml");
 bad_input!(
     xml_envmap_negative_scale_xml,
