@@ -264,10 +264,7 @@ mod tests {
             (f(Vec2::new(h, 0.0)) - f(Vec2::new(-h, 0.0))) / (2.0 * h),
             (f(Vec2::new(0.0, h)) - f(Vec2::new(0.0, -h))) / (2.0 * h),
         );
-        assert!(
-            (g - fd).length() < 1e-2 * fd.length().max(1.0),
-            "{g} vs {fd}"
-        );
+        assert!((g - fd).length() < 1e-2 * fd.length().max(1.0), "{g} vs {fd}");
         assert!(g.length() > 0.1, "a gradient that cannot be zero: {g}");
     }
 
