@@ -3,7 +3,7 @@
 //! render` exit with status 2 and a message that names the file and says what is wrong (the
 //! fragment after `expect:` in the file's first lines), without a panic and without writing
 //! an output file. Meshes are rendered through a small scene that loads them (TOML for OBJ,
-//! Mitsuba XML for PLY and serialized meshes).
+//! Mitsuba XML for PLY and serialized meshes), Radiance HDR images through an XML scene's `envmap`.
 
 mod common;
 
@@ -61,6 +61,15 @@ fn check(name: &str) {
                  type = \"lambert\"\nalbedo = 0.5\n\n[[shape]]\ntype = \"mesh\"\n\
                  file = {:?}\nmaterial = \"m\"\n",
                 input.display().to_string()
+            ),
+        ),
+        Some("hdr") => dir.write(
+            "scene.xml",
+            &format!(
+                "<scene version=\"3.0.0\">\n<sensor type=\"perspective\"><float name=\"fov\" \
+                 value=\"40\"/></sensor>\n<emitter type=\"envmap\"><string name=\"filename\" \
+                 value=\"{}\"/></emitter>\n</scene>\n",
+                input.display()
             ),
         ),
         _ => input.clone(),
@@ -406,4 +415,50 @@ bad_input!(
 bad_input!(
     toml_cylinder_same_points_toml,
     "toml-cylinder-same-points.toml"
+);
+// Spot and envmap emitters, and Radiance HDR (RGBE) images.
+bad_input!(hdr_truncated_hdr, "hdr-truncated.hdr");
+bad_input!(hdr_bad_orientation_hdr, "hdr-bad-orientation.hdr");
+bad_input!(hdr_run_too_long_hdr, "hdr-run-too-long.hdr");
+bad_input!(hdr_huge_size_hdr, "hdr-huge-size.hdr");
+bad_input!(hdr_xyze_format_hdr, "hdr-xyze-format.hdr");
+bad_input!(hdr_no_magic_hdr, "hdr-no-magic.hdr");
+bad_input!(hdr_header_not_ended_hdr, "hdr-header-not-ended.hdr");
+bad_input!(xml_envmap_missing_file_xml, "xml-envmap-missing-file.xml");
+bad_input!(
+    xml_envmap_negative_scale_xml,
+    "xml-envmap-negative-scale.xml"
+);
+bad_input!(
+    xml_envmap_skewed_to_world_xml,
+    "xml-envmap-skewed-to-world.xml"
+);
+bad_input!(
+    xml_spot_cutoff_out_of_range_xml,
+    "xml-spot-cutoff-out-of-range.xml"
+);
+bad_input!(
+    xml_spot_beam_wider_than_cutoff_xml,
+    "xml-spot-beam-wider-than-cutoff.xml"
+);
+bad_input!(
+    xml_spot_constant_texture_xml,
+    "xml-spot-constant-texture.xml"
+);
+bad_input!(
+    toml_envmap_negative_scale_toml,
+    "toml-envmap-negative-scale.toml"
+);
+bad_input!(
+    toml_envmap_missing_file_toml,
+    "toml-envmap-missing-file.toml"
+);
+bad_input!(
+    toml_spot_cutoff_out_of_range_toml,
+    "toml-spot-cutoff-out-of-range.toml"
+);
+bad_input!(toml_spot_up_parallel_toml, "toml-spot-up-parallel.toml");
+bad_input!(
+    toml_spot_position_and_to_world_toml,
+    "toml-spot-position-and-to-world.toml"
 );

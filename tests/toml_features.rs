@@ -334,3 +334,17 @@ fn toml_microfacet_distribution() {
         ]
     );
 }
+
+/// Spot lights by position, direction and up, and by a to_world matrix with a projected
+/// texture: the Mitsuba reference of spot.xml.
+#[test]
+fn toml_spot_lights_match_mitsuba() {
+    twin_matches_mitsuba("spot", 256, 4096);
+}
+
+/// An envmap light (Radiance HDR, scale, a to_world rotation): the Mitsuba reference of
+/// envmap.xml.
+#[test]
+fn toml_envmap_light_matches_mitsuba() {
+    twin_matches_mitsuba("envmap", 256, 4096);
+}

@@ -44,6 +44,37 @@ fn spot_emitters() {
     feature_matches_mitsuba("spot", 256, 4096);
 }
 
+/// `envmap` from a Radiance HDR file: scale, a to_world rotation, the background seen
+/// directly and in a mirror, diffuse and rough plastic shapes lit by it (importance sampled,
+/// with MIS against BSDF sampling).
+#[test]
+fn envmap_emitter_hdr() {
+    feature_matches_mitsuba("envmap", 256, 4096);
+}
+
+/// The same scene with the OpenEXR copy of the map (the same values): the same reference.
+#[test]
+fn envmap_emitter_exr() {
+    let opts = mcrt::LoadOptions {
+        defines: vec![("file".into(), "sky.exr".into())],
+        ..Default::default()
+    };
+    let path = project_path("tests/data/mitsuba/features/envmap.xml");
+    let desc = mcrt::load_scene_with(&path, &opts).expect("scene loads");
+    let fs = desc.settings.clone();
+    let scene = mcrt::scene::Scene::build(desc);
+    let s = settings(
+        &fs,
+        mcrt::scene::desc::FileSettings {
+            spp: Some(128),
+            ..Default::default()
+        },
+    );
+    let r = render_with(&scene, &s);
+    BlockComparison::new(&r, &reference("envmap.exr"), 8, 4096)
+        .assert_within_noise("envmap.xml (EXR)");
+}
+
 /// `normalmap` on a rectangle, `bumpmap` on a sphere, and a `mask` with a bitmap opacity in
 /// front of an area light (shadow rays through it).
 #[test]
@@ -68,4 +99,10 @@ fn orthographic_sensor() {
 #[test]
 fn cylinder_flipped_and_rotated_spheres_serialized_mesh() {
     feature_matches_mitsuba("shapes", 256, 4096);
+}
+
+/// The envmap scene by `direct` (Mitsuba's: one emitter and one BSDF sample by MIS).
+#[test]
+fn envmap_emitter_direct_integrator() {
+    feature_matches_mitsuba("envmap-direct", 256, 4096);
 }

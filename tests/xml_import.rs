@@ -129,10 +129,10 @@ fn unknown_shape_and_emitter() {
     );
     bad_xml(
         "xml-emitter",
-        r#"<emitter type="envmap"/>"#,
-        "envmap",
-        "envmap",
-        &["emitter 'envmap' is not supported", "constant"],
+        r#"<emitter type="projector"/>"#,
+        "projector",
+        "projector",
+        &["emitter 'projector' is not supported", "spot and envmap"],
     );
 }
 

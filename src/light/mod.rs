@@ -161,7 +161,7 @@ pub enum OtherLight {
 impl OtherLight {
     /// Power, for choosing among lights; `radius` bounds the scene (pbrt-v4's convention
     /// for lights at infinity: the power that crosses a disk of that radius).
-    fn power(&self, radius: f32) -> f32 {
+    pub fn power(&self, radius: f32) -> f32 {
         let mean = |c: Color| (c.x + c.y + c.z) / 3.0;
         let disk = std::f32::consts::PI * radius * radius;
         match self {
