@@ -48,7 +48,11 @@ impl Scene {
 /// dp/du and dp/dv of a triangle: from its texture coordinates where given and not
 /// degenerate (an arbitrary basis around `n` where degenerate), else of its barycentric
 /// parametrization (edges p1 − p0 and p2 − p0), as Mitsuba's meshes.
-pub(crate) fn triangle_partials(tri: &Triangle, uvs: Option<[Vec2; 3]>, n: Vec3A) -> (Vec3A, Vec3A) {
+pub(crate) fn triangle_partials(
+    tri: &Triangle,
+    uvs: Option<[Vec2; 3]>,
+    n: Vec3A,
+) -> (Vec3A, Vec3A) {
     let (e1, e2) = (tri.p1 - tri.p0, tri.p2 - tri.p0);
     let Some([t0, t1, t2]) = uvs else {
         return (e1, e2);
@@ -60,10 +64,7 @@ pub(crate) fn triangle_partials(tri: &Triangle, uvs: Option<[Vec2; 3]>, n: Vec3A
         return (f.s, f.t);
     }
     let inv = 1.0 / det;
-    (
-        (e1 * d1.y - e2 * d0.y) * inv,
-        (e2 * d0.x - e1 * d1.x) * inv,
-    )
+    ((e1 * d1.y - e2 * d0.y) * inv, (e2 * d0.x - e1 * d1.x) * inv)
 }
 
 /// dp/du and dp/dv of a sphere of radius `r` at unit normal `n`, for u = φ/2π and v = θ/π.
@@ -92,11 +93,17 @@ mod tests {
         // u along x over 2 units, v along y over 4: dp/du = (2, 0, 0), dp/dv = (0, 4, 0).
         let uvs = [Vec2::ZERO, Vec2::X, Vec2::Y];
         let (du, dv) = triangle_partials(&tri, Some(uvs), Vec3A::Z);
-        assert_eq!((du, dv), (Vec3A::new(2.0, 0.0, 0.0), Vec3A::new(0.0, 4.0, 0.0)));
+        assert_eq!(
+            (du, dv),
+            (Vec3A::new(2.0, 0.0, 0.0), Vec3A::new(0.0, 4.0, 0.0))
+        );
         // Swapped coordinates swap the partials.
         let uvs = [Vec2::ZERO, Vec2::Y, Vec2::X];
         let (du, dv) = triangle_partials(&tri, Some(uvs), Vec3A::Z);
-        assert_eq!((du, dv), (Vec3A::new(0.0, 4.0, 0.0), Vec3A::new(2.0, 0.0, 0.0)));
+        assert_eq!(
+            (du, dv),
+            (Vec3A::new(0.0, 4.0, 0.0), Vec3A::new(2.0, 0.0, 0.0))
+        );
         let (du, dv) = triangle_partials(&tri, None, Vec3A::Z);
         assert_eq!((du, dv), (tri.p1 - tri.p0, tri.p2 - tri.p0));
     }
