@@ -171,6 +171,29 @@ impl Scene {
                     irradiance,
                 },
                 LightDesc::Constant { radiance } => OtherLight::Constant { radiance },
+                LightDesc::Spot {
+                    to_world,
+                    intensity,
+                    cutoff_angle,
+                    beam_width,
+                    texture,
+                } => OtherLight::Spot(Box::new(crate::light::spot::SpotLight::new(
+                    to_world.w_axis.truncate().into(),
+                    glam::Mat3::from_mat4(to_world),
+                    intensity,
+                    cutoff_angle,
+                    beam_width,
+                    texture.and_then(|t| desc.textures.get(t as usize).cloned()),
+                ))),
+                LightDesc::Envmap {
+                    ref image,
+                    scale,
+                    to_world,
+                } => OtherLight::Envmap(std::sync::Arc::new(crate::light::envmap::EnvMap::new(
+                    image,
+                    scale,
+                    glam::Mat3::from_mat4(to_world),
+                ))),
             })
             .collect();
         // The padding vertex that `Scene::vertex_fast` may read past the last one.
