@@ -141,8 +141,8 @@ pub fn float_gradient(tex: &Texture, uv: Vec2) -> Vec2 {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Perturbed {
     /// The unperturbed shading normal in the local frame of the perturbed one
-    /// (`Frame::from_normal`, the integrators' frame).
-    base: Vec3A,
+    /// (`Frame::from_normal`, the integrators' frame); unaligned, to keep `Material` small.
+    base: glam::Vec3,
     /// The shadowing term's α² = min(tan²θ/8, 1), θ the angle between the two normals.
     alpha2: f32,
 }
@@ -152,7 +152,7 @@ impl Perturbed {
     pub fn new(n: Vec3A, base: Vec3A) -> Perturbed {
         let c = n.dot(base);
         Perturbed {
-            base: Frame::from_normal(n).to_local(base),
+            base: Frame::from_normal(n).to_local(base).into(),
             alpha2: (0.125 * tan2(c)).min(1.0),
         }
     }
@@ -163,7 +163,7 @@ impl Perturbed {
     /// 2 / (1 + √(1 + α² tan²θᵢ)), θᵢ measured from the unperturbed normal.
     #[inline]
     pub fn factor(&self, wi: Vec3A) -> f32 {
-        let c = wi.dot(self.base);
+        let c = wi.dot(Vec3A::from(self.base));
         if c * wi.z <= 0.0 {
             return 0.0;
         }
