@@ -22,6 +22,9 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::Arc;
 
+#[path = "principled.rs"]
+mod principled;
+
 struct Builder<'a> {
     doc: &'a Document,
     ids: Ids<'a>,
@@ -565,6 +568,7 @@ impl<'a> Builder<'a> {
                     Bsdf::RoughPlastic(RoughPlastic::new(m.kind, m.alpha_u, eta, d, s, nonlinear))
                 }
             }
+            "principled" | "principledthin" => self.principled(&p, kind, &mut texture)?,
             _ => {
                 if self.lenient {
                     self.warn(
@@ -584,7 +588,8 @@ impl<'a> Builder<'a> {
                     format!(
                         "bsdf '{kind}' is not supported; mcrt has diffuse, dielectric, \
                          thindielectric, roughdielectric, conductor, roughconductor, plastic, \
-                         roughplastic and twosided (--lenient renders it grey diffuse)"
+                         roughplastic, principled, principledthin and twosided (--lenient \
+                         renders it grey diffuse)"
                     ),
                 ));
             }
