@@ -36,3 +36,10 @@ fn textures_meshes_and_includes() {
 fn beckmann_rough_bsdfs_by_default() {
     feature_matches_mitsuba("beckmann", 512, 4096);
 }
+
+/// Mitsuba's principled BSDF (defaults, anisotropic metal, rough glass, clearcoat and sheen,
+/// every parameter at once, flatness with a textured base colour) and principledthin.
+#[test]
+fn principled_bsdfs() {
+    feature_matches_mitsuba("principled", 512, 4096);
+}
