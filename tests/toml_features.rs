@@ -334,3 +334,13 @@ fn toml_microfacet_distribution() {
         ]
     );
 }
+
+#[test]
+fn toml_principled_twin_describes_the_xml_scene() {
+    twin_matches_xml("principled");
+}
+
+#[test]
+fn toml_principled_matches_mitsuba() {
+    twin_matches_mitsuba("principled", 512, 4096);
+}

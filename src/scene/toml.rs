@@ -1006,11 +1006,11 @@ fn material(cx: &Ctx, m: &Spanned<MaterialT>, tex: &Textures) -> Result<Material
         ("diff_trans", span_of(&t.diff_trans)),
     ];
     let kind = t.kind.get_ref().as_str();
-    // Two-sided by default, except the principled BSDF, which has a back side of its own.
+    // Two-sided by default, except the principled BSDFs, which have back sides of their own.
     let two_sided = t
         .two_sided
         .as_ref()
-        .map_or(kind != "principled", |v| *v.get_ref());
+        .map_or(!kind.starts_with("principled"), |v| *v.get_ref());
     let what = format!(
         "{} {kind} material",
         if kind.starts_with(['a', 'e', 'i', 'o', 'u']) {

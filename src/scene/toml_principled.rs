@@ -1,7 +1,8 @@
 //! `principled` and `principledthin` materials of the TOML format: Mitsuba's parameter names
 //! and defaults (`base_color` a colour or a texture's name; `eta` or `specular` as single
 //! numbers), weights in [0, 1] and `diff_trans` in [0, 2]. A principled material has a back
-//! side of its own (refraction out of the object), so `two_sided` defaults to false for it.
+//! side of its own (refraction out of the object; the thin one is the same from both sides),
+//! so `two_sided` defaults to false for them, as in Mitsuba.
 
 use super::{ColorT, Ctx, MaterialT, Textures};
 use crate::material::{Bsdf, Principled, PrincipledThin};
