@@ -242,7 +242,10 @@ impl Material {
             Bsdf::RoughConductor(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
             Bsdf::Plastic(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
             Bsdf::RoughPlastic(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
-            Bsdf::Principled(b) => (b.eval(wo, wi, TransportMode::Radiance), b.pdf(wo, wi)),
+            Bsdf::Principled(b) => {
+                let (f, pdf) = b.eval_cos_pdf(wo, wi, TransportMode::Radiance);
+                (if wi.z == 0.0 { f } else { f / wi.z.abs() }, pdf)
+            }
             Bsdf::PrincipledThin(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
             _ => (Color::ZERO, 0.0),
         }

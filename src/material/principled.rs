@@ -96,6 +96,26 @@ struct Lobes {
     distr: Microfacet,
 }
 
+/// A pair of directions: its half vector and what depends on it.
+struct Pair {
+    lobes: Lobes,
+    /// wo above the surface.
+    front: bool,
+    h: Vec3A,
+    /// Reflection, resp. refraction, through a microfacet both directions see the right side
+    /// of.
+    reflect: bool,
+    refract: bool,
+    /// wo and wi on the same side.
+    any_reflect: bool,
+    /// η in the direction of travel.
+    eta_path: f32,
+    wo_h: f32,
+    wi_h: f32,
+    /// The dielectric Fresnel reflectance at h.
+    f: f32,
+}
+
 impl Principled {
     /// η from Mitsuba's `specular`: the index whose normal-incidence reflectance R0 =
     /// ((η − 1)/(η + 1))² is 0.08·specular (Burley 2012, §5.4), η = 2/(1 − √(0.08 s)) − 1.
@@ -179,55 +199,70 @@ impl Principled {
         (total > 0.0).then(|| p.map(|x| x / total))
     }
 
-    /// f(wo, wi)·|cos θi| (Mitsuba's `eval`); wo towards the viewer, on either side.
+    /// What `eval` and `pdf` share for a pair of directions; None at grazing wo.
     #[inline]
-    pub fn eval_cos(&self, wo: Vec3A, wi: Vec3A, mode: TransportMode) -> Color {
-        let (cos_o, cos_i) = (wo.z, wi.z);
+    fn pair(&self, wo: Vec3A, wi: Vec3A) -> Option<Pair> {
+        let cos_o = wo.z;
         if cos_o == 0.0 {
-            return Color::ZERO;
+            return None;
         }
-        let l = self.lobes();
-        let front = cos_o > 0.0;
         let (h, reflect, refract, eta_path) = self.half_vector(wo, wi);
         let (wo_h, wi_h) = (wo.dot(h), wi.dot(h));
-        let f = fresnel_dielectric(wo_h, self.eta);
-        let refl_ok = reflect && compatible(h, wo, wi, cos_o, true);
-        let refr_ok = refract && compatible(h, wo, wi, cos_o, false);
+        Some(Pair {
+            lobes: self.lobes(),
+            front: cos_o > 0.0,
+            h,
+            reflect: reflect && compatible(h, wo, wi, cos_o, true),
+            refract: refract && compatible(h, wo, wi, cos_o, false),
+            any_reflect: reflect,
+            eta_path,
+            wo_h,
+            wi_h,
+            f: fresnel_dielectric(wo_h, self.eta),
+        })
+    }
+
+    /// f·|cos θi| of a pair (Mitsuba's `eval`).
+    #[inline]
+    fn value(&self, p: &Pair, wo: Vec3A, wi: Vec3A, mode: TransportMode) -> Color {
+        let (cos_o, cos_i) = (wo.z, wi.z);
+        let (l, h, f) = (&p.lobes, p.h, p.f);
         let d = l.distr.d(h);
         let g = l.distr.g(wo, wi, h);
         let base = self.base_color;
         let mut value = Color::ZERO;
-        if refl_ok && f > 0.0 {
+        if p.reflect && f > 0.0 {
             let fp = principled_fresnel(
                 f,
                 self.metallic,
                 self.spec_tint,
                 base,
-                wo_h,
-                front,
+                p.wo_h,
+                p.front,
                 l.bsdf,
                 self.eta,
             );
             value += fp * (d * g / (4.0 * cos_o.abs()));
         }
-        if refr_ok && l.bsdf > 0.0 && f < 1.0 {
+        if p.refract && l.bsdf > 0.0 && f < 1.0 {
+            let eta = p.eta_path;
             let scale = match mode {
-                TransportMode::Radiance => 1.0 / (eta_path * eta_path),
+                TransportMode::Radiance => 1.0 / (eta * eta),
                 TransportMode::Importance => 1.0,
             };
-            let denom = wo_h + eta_path * wi_h;
-            let t = (scale * (1.0 - f) * d * g * eta_path * eta_path * wo_h * wi_h
+            let denom = p.wo_h + eta * p.wi_h;
+            let t = (scale * (1.0 - f) * d * g * eta * eta * p.wo_h * p.wi_h
                 / (cos_o * denom * denom))
                 .abs();
             value += Color::new(base.x.sqrt(), base.y.sqrt(), base.z.sqrt()) * (l.bsdf * t);
         }
-        if refl_ok && front && self.clearcoat > 0.0 {
-            let fcc = schlick_fresnel(Color::splat(0.04), wo_h, self.eta).x;
+        if p.reflect && p.front && self.clearcoat > 0.0 {
+            let fcc = schlick_fresnel(Color::splat(0.04), p.wo_h, self.eta).x;
             let dcc = self.clearcoat_distr().d(h);
             let gcc = clearcoat_g(wo, wi, h);
             value += Color::splat(self.clearcoat * 0.25 * fcc * dcc * gcc * cos_i.abs());
         }
-        if reflect && front {
+        if p.any_reflect && p.front {
             let cos_d = h.dot(wi);
             if l.brdf > 0.0 {
                 let fd = diffuse_retro(
@@ -247,6 +282,45 @@ impl Principled {
         value
     }
 
+    /// The density of `sample` at a pair (Mitsuba's `pdf`).
+    #[inline]
+    fn density(&self, p: &Pair, wo: Vec3A, wi: Vec3A) -> f32 {
+        let Some([p_diffuse, p_clearcoat, p_trans, p_reflect]) =
+            self.probabilities(&p.lobes, p.front, p.f)
+        else {
+            return 0.0;
+        };
+        let dh_dwi = if p.any_reflect {
+            1.0 / (4.0 * p.wi_h)
+        } else {
+            let denom = p.wo_h + p.eta_path * p.wi_h;
+            p.eta_path * p.eta_path * p.wi_h / (denom * denom)
+        }
+        .abs();
+        let wo_up = if p.front { wo } else { -wo };
+        let mut pdf = 0.0;
+        if p.reflect {
+            pdf += p_reflect * p.lobes.distr.pdf_visible(wo_up, p.h) * dh_dwi;
+            if p_clearcoat > 0.0 {
+                pdf += p_clearcoat * self.clearcoat_distr().pdf(p.h) * dh_dwi;
+            }
+        }
+        if p.any_reflect {
+            pdf += p_diffuse * wi.z * FRAC_1_PI;
+        }
+        if p.refract && p_trans > 0.0 {
+            pdf += p_trans * p.lobes.distr.pdf_visible(wo_up, p.h) * dh_dwi;
+        }
+        pdf
+    }
+
+    /// f(wo, wi)·|cos θi| (Mitsuba's `eval`); wo towards the viewer, on either side.
+    #[inline]
+    pub fn eval_cos(&self, wo: Vec3A, wi: Vec3A, mode: TransportMode) -> Color {
+        self.pair(wo, wi)
+            .map_or(Color::ZERO, |p| self.value(&p, wo, wi, mode))
+    }
+
     /// f(wo, wi) (without the cosine).
     #[inline]
     pub fn eval(&self, wo: Vec3A, wi: Vec3A, mode: TransportMode) -> Color {
@@ -259,41 +333,15 @@ impl Principled {
     /// The solid-angle density of `sample` (Mitsuba's `pdf`).
     #[inline]
     pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
-        let cos_o = wo.z;
-        if cos_o == 0.0 {
-            return 0.0;
-        }
-        let l = self.lobes();
-        let front = cos_o > 0.0;
-        let (h, reflect, refract, eta_path) = self.half_vector(wo, wi);
-        let (wo_h, wi_h) = (wo.dot(h), wi.dot(h));
-        let f = fresnel_dielectric(wo_h, self.eta);
-        let Some([p_diffuse, p_clearcoat, p_trans, p_reflect]) = self.probabilities(&l, front, f)
-        else {
-            return 0.0;
-        };
-        let dh_dwi = if reflect {
-            1.0 / (4.0 * wi_h)
-        } else {
-            let denom = wo_h + eta_path * wi_h;
-            eta_path * eta_path * wi_h / (denom * denom)
-        }
-        .abs();
-        let wo_up = if front { wo } else { -wo };
-        let mut pdf = 0.0;
-        if reflect && compatible(h, wo, wi, cos_o, true) {
-            pdf += p_reflect * l.distr.pdf_visible(wo_up, h) * dh_dwi;
-            if p_clearcoat > 0.0 {
-                pdf += p_clearcoat * self.clearcoat_distr().pdf(h) * dh_dwi;
-            }
-        }
-        if reflect {
-            pdf += p_diffuse * wi.z * FRAC_1_PI;
-        }
-        if refract && p_trans > 0.0 && compatible(h, wo, wi, cos_o, false) {
-            pdf += p_trans * l.distr.pdf_visible(wo_up, h) * dh_dwi;
-        }
-        pdf
+        self.pair(wo, wi).map_or(0.0, |p| self.density(&p, wo, wi))
+    }
+
+    /// f(wo, wi)·|cos θi| and the pdf together, sharing the half vector and Fresnel term.
+    #[inline]
+    pub fn eval_cos_pdf(&self, wo: Vec3A, wi: Vec3A, mode: TransportMode) -> (Color, f32) {
+        self.pair(wo, wi).map_or((Color::ZERO, 0.0), |p| {
+            (self.value(&p, wo, wi, mode), self.density(&p, wo, wi))
+        })
     }
 
     /// Samples wi: `u1` picks the lobe, `u2` the direction (Mitsuba's `sample`).
@@ -342,11 +390,11 @@ impl Principled {
         if !(if refracts { side < 0.0 } else { side > 0.0 }) {
             return None;
         }
-        let pdf = self.pdf(wo, wi);
+        let (value, pdf) = self.eval_cos_pdf(wo, wi, mode);
         if !(pdf > 0.0) || !pdf.is_finite() {
             return None;
         }
-        let weight = self.eval_cos(wo, wi, mode) / pdf;
+        let weight = value / pdf;
         Some(BsdfSample {
             wi,
             weight,
