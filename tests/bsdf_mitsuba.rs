@@ -91,6 +91,14 @@ fn principled(case: &str) -> Material {
             diffuse_reflectance_sampling_rate: 1.5,
             ..p
         }),
+        "pr_sheen_glass" => Bsdf::Principled(Principled {
+            base_color: c(0.8, 0.4, 0.2),
+            spec_trans: 1.0,
+            sheen: 0.8,
+            sheen_tint: 0.5,
+            roughness: 0.5,
+            ..p
+        }),
         "pt_default" => Bsdf::PrincipledThin(t),
         "pt_all" => Bsdf::PrincipledThin(PrincipledThin {
             base_color: c(0.3, 0.7, 0.2),
@@ -128,6 +136,7 @@ fn principled(case: &str) -> Material {
 
 /// The case's material; `bk_` cases are the same materials with the Beckmann distribution.
 fn material(case: &str) -> Material {
+    let case = case.strip_prefix("llvm_").unwrap_or(case);
     if case.starts_with("pr_") || case.starts_with("pt_") {
         return principled(case);
     }
@@ -399,4 +408,11 @@ fn principled_sampling_matches_mitsuba() {
     eprintln!("{n} samples, {rejected} rejected");
     assert_eq!(n, 720);
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// Sheen with spec_trans = 1 (no diffuse lobe), where Mitsuba's variants differ: mcrt follows
+/// the vectorised one (llvm_ad_rgb), which renders the references and keeps the sheen.
+#[test]
+fn principled_sheen_follows_mitsubas_vectorised_variant() {
+    check_non_delta("llvm_pr_");
 }

@@ -12,7 +12,7 @@ Mitsuba's eval, i.e. f·|cos θi|; mode is R (radiance) or I (importance). For t
 (conductor, thindielectric, plastic's coating) the line holds the sample weight of the
 delta lobe instead (wi = the sampled direction, pdf = the lobe's selection probability).
 
-The principled and principledthin cases (pr_*, pt_*), from their own random stream after
+The principled and principledthin cases (pr_*, pt_*; llvm_* from the llvm_ad_rgb variant), from their own random stream after
 everything else, are evaluated from both sides and in both transport modes; their sample
 lines (named smp_pr_*, smp_pt_*) hold what `sample` returns for given random numbers:
 
@@ -118,6 +118,11 @@ PRINCIPLED_THIN = {
                  "diffuse_transmittance_sampling_rate": 2.0, "diff_trans": 0.4},
 }
 
+LLVM = {
+    "pr_sheen_glass": {"type": "principled", "base_color": rgb(0.8, 0.4, 0.2), "spec_trans": 1.0,
+                       "sheen": 0.8, "sheen_tint": 0.5, "roughness": 0.5},
+}
+
 
 def rand_dir(rng, upper):
     z = rng.uniform(0.02, 1.0)
@@ -126,7 +131,7 @@ def rand_dir(rng, upper):
     return [r * math.cos(phi), r * math.sin(phi), z if upper else -z]
 
 
-def non_delta(rng, cases):
+def non_delta(rng, cases, prefix=""):
     for name, d in cases.items():
         bsdf = mi.load_dict(d)
         two_sided = d["type"] in ("roughdielectric", "principled", "principledthin")
@@ -146,8 +151,9 @@ def non_delta(rng, cases):
                 f = bsdf.eval(ctx, si, mi.Vector3f(wi))
                 p = bsdf.pdf(ctx, si, mi.Vector3f(wi))
                 vals = [*wo, *wi]
-                print(name, " ".join(f"{v:.9g}" for v in vals), tag,
-                      " ".join(f"{float(v):.9g}" for v in (f[0], f[1], f[2], p)))
+                print(prefix + name, " ".join(f"{v:.9g}" for v in vals), tag,
+                      " ".join(f"{float(v[0] if hasattr(v, '__len__') else v):.9g}"
+                               for v in (f[0], f[1], f[2], p)))
             n += 1
 
 
@@ -173,6 +179,10 @@ def main():
     non_delta(rng, PRINCIPLED)
     non_delta(rng, PRINCIPLED_THIN)
     samples(rng, {**PRINCIPLED, **PRINCIPLED_THIN})
+    # Sheen with spec_trans = 1, where the variants differ: the vectorised one's (which
+    # renders the references) lines are named llvm_*.
+    mi.set_variant("llvm_ad_rgb")
+    non_delta(rng, LLVM, prefix="llvm_")
 
 
 def samples(rng, cases):
