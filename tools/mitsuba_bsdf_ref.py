@@ -12,8 +12,8 @@ Mitsuba's eval, i.e. f·|cos θi|; mode is R (radiance) or I (importance). For t
 (conductor, thindielectric, plastic's coating) the line holds the sample weight of the
 delta lobe instead (wi = the sampled direction, pdf = the lobe's selection probability).
 
-The principled and principledthin cases (pr_*, pt_*; llvm_* from the llvm_ad_rgb variant), from their own random stream after
-everything else, are evaluated from both sides and in both transport modes; their sample
+The principled and principledthin cases (pr_*, pt_*; llvm_* from the llvm_ad_rgb variant),
+from their own random stream after everything else, are evaluated from both sides and in both transport modes; their sample
 lines (named smp_pr_*, smp_pt_*) hold what `sample` returns for given random numbers:
 
     case wo.x wo.y wo.z wi.x wi.y wi.z S weight.r weight.g weight.b pdf u1 u2.x u2.y

@@ -28,7 +28,8 @@
 //!
 //! One case is ambiguous in Mitsuba: with spec_trans = 1 (brdf = 0) its scalar variants skip
 //! the sheen (it sits inside the diffuse lobe's branch) while the vectorised ones, which render
-//! the reference images, keep it (their branches are masks). mcrt follows the masks.
+//! the reference images, keep it (their branches are masks). mcrt follows the masks
+//! (tests/bsdf_mitsuba.rs checks it against `llvm_ad_rgb`).
 
 use super::dielectric::{fresnel_dielectric, fresnel_refraction};
 use super::microfacet::{reflect_about, Microfacet};
