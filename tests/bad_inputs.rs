@@ -462,3 +462,52 @@ bad_input!(
     toml_spot_position_and_to_world_toml,
     "toml-spot-position-and-to-world.toml"
 );
+// Issue 25: the principled BSDFs' parameters (ranges, unknown names, eta or specular).
+bad_input!(
+    toml_principled_eta_and_specular_toml,
+    "toml-principled-eta-and-specular.toml"
+);
+bad_input!(
+    toml_principled_metallic_two_toml,
+    "toml-principled-metallic-two.toml"
+);
+bad_input!(
+    toml_principled_negative_sheen_toml,
+    "toml-principled-negative-sheen.toml"
+);
+bad_input!(
+    toml_principledthin_clearcoat_toml,
+    "toml-principledthin-clearcoat.toml"
+);
+bad_input!(
+    xml_principled_eta_and_specular_xml,
+    "xml-principled-eta-and-specular.xml"
+);
+bad_input!(
+    xml_principled_metallic_two_xml,
+    "xml-principled-metallic-two.xml"
+);
+bad_input!(
+    xml_principled_negative_eta_xml,
+    "xml-principled-negative-eta.xml"
+);
+bad_input!(
+    xml_principled_negative_roughness_xml,
+    "xml-principled-negative-roughness.xml"
+);
+bad_input!(
+    xml_principled_sampling_rate_negative_xml,
+    "xml-principled-sampling-rate-negative.xml"
+);
+bad_input!(
+    xml_principled_unknown_parameter_xml,
+    "xml-principled-unknown-parameter.xml"
+);
+bad_input!(
+    xml_principledthin_diff_trans_three_xml,
+    "xml-principledthin-diff-trans-three.xml"
+);
+bad_input!(
+    xml_principledthin_metallic_xml,
+    "xml-principledthin-metallic.xml"
+);

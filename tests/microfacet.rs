@@ -751,5 +751,6 @@ fn sides_and_specularity() {
     assert!(!rough_dielectric(Beckmann, 0.3, 0.3, 1.5).is_specular());
     assert!(one_sided[0].is_specular());
     eprintln!("size_of::<Bsdf>() = {}", std::mem::size_of::<Bsdf>());
-    assert!(std::mem::size_of::<Bsdf>() <= 64);
+    // The principled BSDF: fourteen parameters and three sampling rates, 68 bytes, and the tag.
+    assert!(std::mem::size_of::<Bsdf>() <= 72);
 }

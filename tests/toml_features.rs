@@ -348,3 +348,13 @@ fn toml_spot_lights_match_mitsuba() {
 fn toml_envmap_light_matches_mitsuba() {
     twin_matches_mitsuba("envmap", 256, 4096);
 }
+
+#[test]
+fn toml_principled_twin_describes_the_xml_scene() {
+    twin_matches_xml("principled");
+}
+
+#[test]
+fn toml_principled_matches_mitsuba() {
+    twin_matches_mitsuba("principled", 512, 4096);
+}

@@ -106,3 +106,10 @@ fn cylinder_flipped_and_rotated_spheres_serialized_mesh() {
 fn envmap_emitter_direct_integrator() {
     feature_matches_mitsuba("envmap-direct", 256, 4096);
 }
+
+/// Mitsuba's principled BSDF (defaults, anisotropic metal, rough glass, clearcoat and sheen,
+/// every parameter at once, flatness with a textured base colour) and principledthin.
+#[test]
+fn principled_bsdfs() {
+    feature_matches_mitsuba("principled", 512, 4096);
+}

@@ -12,6 +12,9 @@ pub mod mirror;
 pub mod normal_map;
 pub mod oren_nayar;
 pub mod plastic;
+pub mod principled;
+pub mod principled_lobes;
+pub mod principled_thin;
 pub mod rough_conductor;
 pub mod rough_dielectric;
 pub mod rough_plastic;
@@ -25,6 +28,8 @@ pub use microfacet::{Microfacet, MicrofacetType};
 pub use mirror::Mirror;
 pub use oren_nayar::OrenNayar;
 pub use plastic::Plastic;
+pub use principled::Principled;
+pub use principled_thin::PrincipledThin;
 pub use rough_conductor::RoughConductor;
 pub use rough_dielectric::RoughDielectric;
 pub use rough_plastic::RoughPlastic;
@@ -67,6 +72,10 @@ pub enum Bsdf {
     /// A delta lobe plus a diffuse one: not all-delta (`is_specular` is false).
     Plastic(Plastic),
     RoughPlastic(RoughPlastic),
+    /// Mitsuba's `principled`: handles its own back side unless the material is two-sided.
+    Principled(Principled),
+    /// Mitsuba's `principledthin`: the same from both sides.
+    PrincipledThin(PrincipledThin),
     /// Absorbs everything (the back of a light, a black body).
     Black,
 }
@@ -142,6 +151,8 @@ impl Material {
                 | Bsdf::RoughConductor(_)
                 | Bsdf::Plastic(_)
                 | Bsdf::RoughPlastic(_)
+                | Bsdf::Principled(_)
+                | Bsdf::PrincipledThin(_)
         )
     }
 
@@ -158,6 +169,8 @@ impl Material {
             Bsdf::RoughConductor(b) => b.specular_reflectance = c,
             Bsdf::Plastic(b) => b.diffuse_reflectance = c,
             Bsdf::RoughPlastic(b) => b.diffuse_reflectance = c,
+            Bsdf::Principled(b) => b.base_color = c,
+            Bsdf::PrincipledThin(b) => b.base_color = c,
             _ => {}
         }
         self
@@ -173,13 +186,18 @@ impl Material {
         )
     }
 
-    /// True for BSDFs that transmit as well as reflect (two-sided by nature).
+    /// True for BSDFs that transmit as well as reflect (two-sided by nature), and the
+    /// principled BSDF, which has a back side of its own unless wrapped in `twosided`.
     #[inline]
     fn is_transmissive(&self) -> bool {
-        matches!(
-            self.bsdf,
-            Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_) | Bsdf::ThinDielectric(_)
-        )
+        match self.bsdf {
+            Bsdf::Dielectric(_)
+            | Bsdf::RoughDielectric(_)
+            | Bsdf::ThinDielectric(_)
+            | Bsdf::PrincipledThin(_) => true,
+            Bsdf::Principled(_) => !self.two_sided,
+            _ => false,
+        }
     }
 
     #[inline]
@@ -243,6 +261,8 @@ impl Material {
             Bsdf::RoughConductor(b) => b.eval(wo, wi),
             Bsdf::Plastic(b) => b.eval(wo, wi),
             Bsdf::RoughPlastic(b) => b.eval(wo, wi),
+            Bsdf::Principled(b) => b.eval(wo, wi, mode),
+            Bsdf::PrincipledThin(b) => b.eval(wo, wi),
             _ => Color::ZERO,
         }
     }
@@ -280,6 +300,11 @@ impl Material {
             Bsdf::RoughConductor(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
             Bsdf::Plastic(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
             Bsdf::RoughPlastic(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
+            Bsdf::Principled(b) => {
+                let (f, pdf) = b.eval_cos_pdf(wo, wi, TransportMode::Radiance);
+                (if wi.z == 0.0 { f } else { f / wi.z.abs() }, pdf)
+            }
+            Bsdf::PrincipledThin(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
             _ => (Color::ZERO, 0.0),
         }
     }
@@ -307,6 +332,8 @@ impl Material {
             Bsdf::RoughConductor(b) => b.pdf(wo, wi),
             Bsdf::Plastic(b) => b.pdf(wo, wi),
             Bsdf::RoughPlastic(b) => b.pdf(wo, wi),
+            Bsdf::Principled(b) => b.pdf(wo, wi),
+            Bsdf::PrincipledThin(b) => b.pdf(wo, wi),
             _ => 0.0,
         }
     }
@@ -347,6 +374,8 @@ impl Material {
             Bsdf::ThinDielectric(b) => return b.sample(wo, u1),
             Bsdf::Plastic(b) => b.sample(wo_f, u1, u2),
             Bsdf::RoughPlastic(b) => b.sample(wo_f, u1, u2),
+            Bsdf::Principled(b) => b.sample(wo_f, u1, u2, mode),
+            Bsdf::PrincipledThin(b) => b.sample(wo_f, u1, u2),
             Bsdf::Black => None,
         }?;
         bs.wi *= flip;
@@ -375,6 +404,9 @@ impl Material {
                 let f0 = dielectric::fresnel_dielectric(1.0, b.eta);
                 b.specular_reflectance * f0 + b.diffuse_reflectance * (1.0 - f0)
             }
+            // Mitsuba's `eval_diffuse_reflectance`.
+            Bsdf::Principled(b) => b.base_color,
+            Bsdf::PrincipledThin(b) => b.base_color,
             Bsdf::Black => Color::ZERO,
         }
     }

@@ -25,6 +25,9 @@ use toml::Spanned;
 
 type V3 = [f32; 3];
 
+#[path = "toml_principled.rs"]
+mod principled;
+
 /// A colour: one number (grey) or three (linear RGB); where a material's main colour is
 /// expected, also the name of a `[texture.NAME]`.
 #[derive(Deserialize, Clone)]
@@ -128,6 +131,19 @@ struct MaterialT {
     distribution: Option<Spanned<String>>,
     nonlinear: Option<Spanned<bool>>,
     two_sided: Option<Spanned<bool>>,
+    // `principled` and `principledthin` (toml_principled.rs), with `eta` and `specular`.
+    base_color: Option<Spanned<ColorT>>,
+    roughness: Option<Spanned<f32>>,
+    anisotropic: Option<Spanned<f32>>,
+    metallic: Option<Spanned<f32>>,
+    spec_trans: Option<Spanned<f32>>,
+    spec_tint: Option<Spanned<f32>>,
+    sheen: Option<Spanned<f32>>,
+    sheen_tint: Option<Spanned<f32>>,
+    flatness: Option<Spanned<f32>>,
+    clearcoat: Option<Spanned<f32>>,
+    clearcoat_gloss: Option<Spanned<f32>>,
+    diff_trans: Option<Spanned<f32>>,
 }
 
 #[derive(Deserialize)]
@@ -1059,9 +1075,25 @@ fn material(cx: &Ctx, m: &Spanned<MaterialT>, tex: &Textures) -> Result<Material
         ("distribution", span_of(&t.distribution)),
         ("nonlinear", span_of(&t.nonlinear)),
         ("two_sided", span_of(&t.two_sided)),
+        ("base_color", span_of(&t.base_color)),
+        ("roughness", span_of(&t.roughness)),
+        ("anisotropic", span_of(&t.anisotropic)),
+        ("metallic", span_of(&t.metallic)),
+        ("spec_trans", span_of(&t.spec_trans)),
+        ("spec_tint", span_of(&t.spec_tint)),
+        ("sheen", span_of(&t.sheen)),
+        ("sheen_tint", span_of(&t.sheen_tint)),
+        ("flatness", span_of(&t.flatness)),
+        ("clearcoat", span_of(&t.clearcoat)),
+        ("clearcoat_gloss", span_of(&t.clearcoat_gloss)),
+        ("diff_trans", span_of(&t.diff_trans)),
     ];
-    let two_sided = t.two_sided.as_ref().is_none_or(|v| *v.get_ref());
     let kind = t.kind.get_ref().as_str();
+    // Two-sided by default, except the principled BSDFs, which have back sides of their own.
+    let two_sided = t
+        .two_sided
+        .as_ref()
+        .map_or(!kind.starts_with("principled"), |v| *v.get_ref());
     let what = format!(
         "{} {kind} material",
         if kind.starts_with(['a', 'e', 'i', 'o', 'u']) {
@@ -1181,7 +1213,8 @@ fn material(cx: &Ctx, m: &Spanned<MaterialT>, tex: &Textures) -> Result<Material
             cx.only(&present, &[], &what)?;
             Bsdf::Black
         }
-        other => return cx.err(t.kind.span(), format!("unknown material type '{other}' (expected lambert, oren_nayar, mirror, dielectric, thindielectric, roughdielectric, conductor, roughconductor, plastic, roughplastic or black)")),
+        "principled" | "principledthin" => principled::bsdf(cx, t, kind, &present, &what, tex, &mut texture)?,
+        other => return cx.err(t.kind.span(), format!("unknown material type '{other}' (expected lambert, oren_nayar, mirror, dielectric, thindielectric, roughdielectric, conductor, roughconductor, plastic, roughplastic, principled, principledthin or black)")),
     };
     let mut m = Material::new(bsdf, two_sided);
     m.texture = texture;

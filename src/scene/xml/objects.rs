@@ -21,6 +21,8 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::Arc;
 
+#[path = "principled.rs"]
+mod principled;
 mod wrappers;
 
 struct Builder<'a> {
@@ -531,6 +533,7 @@ impl<'a> Builder<'a> {
                     Bsdf::RoughPlastic(RoughPlastic::new(m.kind, m.alpha_u, eta, d, s, nonlinear))
                 }
             }
+            "principled" | "principledthin" => self.principled(&p, kind, &mut texture)?,
             _ => {
                 if self.lenient {
                     self.warn(
@@ -550,8 +553,8 @@ impl<'a> Builder<'a> {
                     format!(
                         "bsdf '{kind}' is not supported; mcrt has diffuse, dielectric, \
                          thindielectric, roughdielectric, conductor, roughconductor, plastic, \
-                         roughplastic, twosided, normalmap, bumpmap and mask (--lenient renders \
-                         it grey diffuse)"
+                         roughplastic, principled, principledthin, twosided, normalmap, bumpmap \
+                         and mask (--lenient renders it grey diffuse)"
                     ),
                 ));
             }
