@@ -305,3 +305,24 @@ bad_input!(
     toml_rr_survival_one_minus_ulp_toml,
     "toml-rr-survival-one-minus-ulp.toml"
 );
+bad_input!(xml_texture_on_ior_xml, "xml-texture-on-ior.xml");
+bad_input!(
+    xml_texture_roughplastic_alpha_xml,
+    "xml-texture-roughplastic-alpha.xml"
+);
+bad_input!(
+    xml_blend_weight_above_one_xml,
+    "xml-blend-weight-above-one.xml"
+);
+bad_input!(xml_blend_one_child_xml, "xml-blend-one-child.xml");
+bad_input!(xml_blend_without_weight_xml, "xml-blend-without-weight.xml");
+bad_input!(
+    xml_blend_nested_too_deep_xml,
+    "xml-blend-nested-too-deep.xml"
+);
+bad_input!(
+    xml_blend_contains_itself_xml,
+    "xml-blend-contains-itself.xml"
+);
+bad_input!(xml_unknown_wrap_mode_xml, "xml-unknown-wrap-mode.xml");
+bad_input!(xml_unknown_filter_type_xml, "xml-unknown-filter-type.xml");

@@ -137,9 +137,15 @@ fn twin_matches_xml(name: &str) {
             if !format!("{:?}", ma.bsdf).contains("Dielectric") {
                 assert_eq!(ma.two_sided, mb.two_sided, "{name}: shape {i} sides");
             }
+            let textures = |m: &mcrt::material::Material, d: &mcrt::scene::SceneDesc| {
+                m.slots
+                    .iter()
+                    .map(|b| d.textures[b.texture as usize].clone())
+                    .collect::<Vec<_>>()
+            };
             assert_eq!(
-                ma.texture.map(|k| &x.textures[k as usize]),
-                mb.texture.map(|k| &t.textures[k as usize]),
+                textures(ma, &x),
+                textures(mb, &t),
                 "{name}: shape {i} texture"
             );
         }
@@ -292,7 +298,7 @@ fn toml_defaults_of_the_new_materials_and_lights() {
     assert!(d
         .materials
         .iter()
-        .all(|m| m.two_sided && m.texture.is_none()));
+        .all(|m| m.two_sided && m.slots.is_empty()));
     assert_eq!(
         format!("{:?}", d.lights),
         "[Constant { radiance: Vec3(0.5, 0.5, 0.5) }]"

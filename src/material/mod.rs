@@ -3,7 +3,13 @@
 //! A closed enum, matched in the integrators' inner loops (no dynamic dispatch). All BSDFs
 //! work in the local shading frame: z is the shading normal, `wo` points towards the viewer
 //! (or the previous vertex) and `wi` towards the light; both are unit vectors.
+//!
+//! Parameters given by textures (colours, roughness, blend weights) are filled in per hit
+//! by one mechanism, [`textured`]: a parameter is a field of the BSDF, and a texture bound
+//! to it a [`Binding`] whose slot writes the texture's value there. Blends ([`blend`]) keep
+//! their parts by material index and become a mixture at the hit.
 
+pub mod blend;
 pub mod conductor;
 pub mod dielectric;
 pub mod lambert;
@@ -15,8 +21,10 @@ pub mod rough_conductor;
 pub mod rough_dielectric;
 pub mod rough_plastic;
 pub mod sampling;
+pub mod textured;
 pub mod thin_dielectric;
 
+pub use blend::{Blend, MAX_BLEND_DEPTH};
 pub use conductor::{conductor_ior, Conductor};
 pub use dielectric::Dielectric;
 pub use lambert::Lambert;
@@ -27,6 +35,7 @@ pub use plastic::Plastic;
 pub use rough_conductor::RoughConductor;
 pub use rough_dielectric::RoughDielectric;
 pub use rough_plastic::RoughPlastic;
+pub use textured::{Binding, Slot};
 pub use thin_dielectric::ThinDielectric;
 
 use crate::Color;
@@ -66,6 +75,9 @@ pub enum Bsdf {
     /// A delta lobe plus a diffuse one: not all-delta (`is_specular` is false).
     Plastic(Plastic),
     RoughPlastic(RoughPlastic),
+    /// Two BSDFs mixed by a weight, their parts by material index ([`blend`]): resolved per
+    /// hit into [`Material::mix`]; as a BSDF of its own it reflects nothing.
+    Blend(Blend),
     /// Absorbs everything (the back of a light, a black body).
     Black,
 }
@@ -83,16 +95,22 @@ impl Bsdf {
 }
 
 /// A BSDF and how it treats the back side of a surface.
-#[derive(Clone, Copy, Debug)]
+///
+/// A scene's materials hold constants and the bindings of their textured parameters; the
+/// material at a hit ([`Material::at`]) holds the values there, and for a blend the mixture
+/// of its parts.
+#[derive(Clone, Debug)]
 pub struct Material {
     pub bsdf: Bsdf,
     /// Reflective BSDFs on a one-sided material reflect nothing when seen from behind the
     /// geometric normal (Mitsuba's convention); two-sided ones reflect alike on both sides
     /// (pbrt's). Dielectrics have two sides by nature and ignore this.
     pub two_sided: bool,
-    /// A texture (index into the scene's) giving the BSDF's main colour per hit: diffuse
-    /// reflectance, or a metal's specular reflectance.
-    pub texture: Option<u32>,
+    /// The textured parameters ([`textured`]); empty for a material of constants.
+    pub slots: Box<[Binding]>,
+    /// At a hit on a blend: its leaves and their weights ([`blend`]); the methods below
+    /// then describe the mixture.
+    pub mix: Option<Box<[blend::Part]>>,
 }
 
 impl Material {
@@ -100,46 +118,24 @@ impl Material {
         Material {
             bsdf,
             two_sided,
-            texture: None,
+            slots: Box::default(),
+            mix: None,
         }
     }
 
-    /// Whether the BSDF has a main colour a texture can give.
-    pub fn takes_texture(&self) -> bool {
-        matches!(
-            self.bsdf,
-            Bsdf::Lambert(_)
-                | Bsdf::OrenNayar(_)
-                | Bsdf::Mirror(_)
-                | Bsdf::Conductor(_)
-                | Bsdf::RoughConductor(_)
-                | Bsdf::Plastic(_)
-                | Bsdf::RoughPlastic(_)
-        )
-    }
-
-    /// This material with its main colour set to `c` (a texture's value at a hit). Derived
-    /// quantities such as plastic's lobe-selection weight keep the values they were built
-    /// with, from the texture's mean, as in Mitsuba.
+    /// True if the material reads texture coordinates at a hit.
     #[inline]
-    pub fn with_color(mut self, c: Color) -> Material {
-        match &mut self.bsdf {
-            Bsdf::Lambert(b) => b.albedo = c,
-            Bsdf::OrenNayar(b) => b.albedo = c,
-            Bsdf::Mirror(b) => b.reflectance = c,
-            Bsdf::Conductor(b) => b.specular_reflectance = c,
-            Bsdf::RoughConductor(b) => b.specular_reflectance = c,
-            Bsdf::Plastic(b) => b.diffuse_reflectance = c,
-            Bsdf::RoughPlastic(b) => b.diffuse_reflectance = c,
-            _ => {}
-        }
-        self
+    pub fn reads_uv(&self) -> bool {
+        self.varies()
     }
 
     /// True when every scattering is a delta (mirror, glass, smooth metal, thin sheet): no
     /// light sampling there. Plastic mixes a delta lobe with a diffuse one and is not.
     #[inline]
     pub fn is_specular(&self) -> bool {
+        if let Some(parts) = &self.mix {
+            return parts.iter().all(|p| p.material.is_specular());
+        }
         matches!(
             self.bsdf,
             Bsdf::Mirror(_) | Bsdf::Dielectric(_) | Bsdf::Conductor(_) | Bsdf::ThinDielectric(_)
@@ -186,6 +182,9 @@ impl Material {
     /// f(wo, wi) in either transport mode (only rough refraction tells them apart).
     #[inline]
     pub fn eval_mode(&self, wo: Vec3A, wi: Vec3A, mode: TransportMode) -> Color {
+        if let Some(parts) = &self.mix {
+            return blend::eval_pdf(parts, wo, wi, mode).0;
+        }
         if let Bsdf::RoughDielectric(b) = &self.bsdf {
             return b.eval(wo, wi, mode);
         }
@@ -208,6 +207,9 @@ impl Material {
     /// test and one match: what next-event estimation needs for each shadow ray.
     #[inline(always)]
     pub fn eval_pdf(&self, wo: Vec3A, wi: Vec3A) -> (Color, f32) {
+        if let Some(parts) = &self.mix {
+            return blend::eval_pdf(parts, wo, wi, TransportMode::Radiance);
+        }
         if let Bsdf::RoughDielectric(b) = &self.bsdf {
             return (b.eval(wo, wi, TransportMode::Radiance), b.pdf(wo, wi));
         }
@@ -229,6 +231,9 @@ impl Material {
     /// Solid-angle pdf of sampling `wi` given `wo`. Zero for delta BSDFs.
     #[inline]
     pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
+        if let Some(parts) = &self.mix {
+            return blend::eval_pdf(parts, wo, wi, TransportMode::Radiance).1;
+        }
         if let Bsdf::RoughDielectric(b) = &self.bsdf {
             return b.pdf(wo, wi);
         }
@@ -248,6 +253,9 @@ impl Material {
     /// Samples wi. `u1` picks among lobes (reflection or refraction), `u2` the direction.
     #[inline(always)]
     pub fn sample(&self, wo: Vec3A, u1: f32, u2: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+        if let Some(parts) = &self.mix {
+            return blend::sample(parts, wo, u1, u2, mode);
+        }
         let s = self.orient(wo)?;
         let flip = Vec3A::new(1.0, 1.0, s);
         let wo_f = wo * flip;
@@ -262,7 +270,7 @@ impl Material {
             Bsdf::ThinDielectric(b) => return b.sample(wo, u1),
             Bsdf::Plastic(b) => b.sample(wo_f, u1, u2),
             Bsdf::RoughPlastic(b) => b.sample(wo_f, u1, u2),
-            Bsdf::Black => None,
+            Bsdf::Blend(_) | Bsdf::Black => None,
         }?;
         bs.wi *= flip;
         Some(bs)
@@ -271,6 +279,9 @@ impl Material {
     /// The directional-hemispherical reflectance at normal incidence, roughly: the colour a
     /// denoiser or photon tracer takes as the surface's albedo.
     pub fn albedo(&self) -> Color {
+        if let Some(parts) = &self.mix {
+            return blend::albedo(parts);
+        }
         match &self.bsdf {
             Bsdf::Lambert(b) => b.albedo,
             Bsdf::OrenNayar(b) => b.albedo,
@@ -290,7 +301,7 @@ impl Material {
                 let f0 = dielectric::fresnel_dielectric(1.0, b.eta);
                 b.specular_reflectance * f0 + b.diffuse_reflectance * (1.0 - f0)
             }
-            Bsdf::Black => Color::ZERO,
+            Bsdf::Blend(_) | Bsdf::Black => Color::ZERO,
         }
     }
 }

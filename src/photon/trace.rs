@@ -148,10 +148,12 @@ fn trace_one(
         return;
     };
     let light = &scene.lights.lights[id];
-    let (p, nl, err) = light.sample_point(s.next_2d());
+    let u = s.next_2d();
+    let (p, nl, err) = light.sample_point(u);
     let d = Frame::from_normal(nl).to_world(square_to_cosine_hemisphere(s.next_2d()));
     // Le·cos / (pmf · 1/A · cos/π) / n
-    let mut power = light.radiance * (std::f32::consts::PI * light.area / (pmf * n as f32));
+    let le = scene.lights.radiance_of_sample(id, u, nl);
+    let mut power = le * (std::f32::consts::PI * light.area / (pmf * n as f32));
     let mut ray = Ray::new(offset_ray_origin(p, err, nl, d), d);
     let mut depth = 1u32;
     let mut specular_path = true;

@@ -20,7 +20,7 @@ use crate::accel::{ShadowPacket, WideBvh, PACKET};
 use crate::camera::CameraDesc;
 use crate::geometry::ray::{offset_ray_origin, SHADOW_EPSILON};
 use crate::geometry::{Ray, Sphere, Triangle};
-use crate::light::Lights;
+use crate::light::{Lights, NO_TEXTURE};
 use crate::material::Material;
 use glam::{Vec2, Vec3A, Vec4};
 
@@ -266,17 +266,10 @@ impl Scene {
             let s = &self.spheres[idx[1] as usize];
             let (p, n, p_err) = s.surface_point(ray.at(t_hit));
             // The angles only where a texture reads them (an arctangent and an arccosine).
-            let uv = if self.materials[material as usize].texture.is_some() {
-                let phi = n.y.atan2(n.x);
-                let phi = if phi < 0.0 {
-                    phi + std::f32::consts::TAU
-                } else {
-                    phi
-                };
-                Vec2::new(
-                    phi / std::f32::consts::TAU,
-                    n.z.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
-                )
+            let uv = if self.materials[material as usize].reads_uv()
+                || (light != NO_LIGHT && self.lights.lights[light as usize].texture != NO_TEXTURE)
+            {
+                crate::geometry::sphere::uv_of_normal(n)
             } else {
                 Vec2::ZERO
             };
@@ -454,14 +447,11 @@ impl Scene {
         self
     }
 
-    /// The material at a hit, its texture (if any) evaluated there.
+    /// The material at a hit: its textured parameters evaluated there, a blend resolved
+    /// ([`Material::at`]).
     #[inline]
     pub fn material_at(&self, si: &Interaction) -> Material {
-        let m = self.materials[si.material as usize];
-        match m.texture {
-            None => m,
-            Some(t) => m.with_color(self.textures[t as usize].eval(si.uv)),
-        }
+        self.materials[si.material as usize].at(&self.materials, &self.textures, si.uv)
     }
 
     pub fn camera(&self, name: Option<&str>) -> Option<&CameraDesc> {

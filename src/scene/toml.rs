@@ -10,9 +10,10 @@ use crate::camera::{CameraDesc, FovAxis};
 use crate::geometry::mesh::TriangleMesh;
 use crate::integrator::IntegratorKind;
 use crate::material::conductor::{conductor_ior, conductor_names};
+use crate::material::textured::MAIN_COLOR;
 use crate::material::{
-    Bsdf, Conductor, Dielectric, Lambert, Material, Microfacet, MicrofacetType, Mirror, OrenNayar,
-    Plastic, RoughConductor, RoughDielectric, RoughPlastic, ThinDielectric,
+    Binding, Bsdf, Conductor, Dielectric, Lambert, Material, Microfacet, MicrofacetType, Mirror,
+    OrenNayar, Plastic, RoughConductor, RoughDielectric, RoughPlastic, ThinDielectric,
 };
 use crate::texture::{Bitmap, BitmapTexture, FilterType, Texture, UvTransform, WrapMode};
 use crate::Color;
@@ -1023,7 +1024,7 @@ fn material(cx: &Ctx, m: &Spanned<MaterialT>, tex: &Textures) -> Result<Material
         "dielectric" => {
             cx.only(&present, &["ior", "ext_ior"], &what)?;
             cx.need(&t.ior, "ior", &what, &at)?;
-            Bsdf::Dielectric(Dielectric { eta: eta_of(1.5046)? })
+            Bsdf::Dielectric(Dielectric::new(eta_of(1.5046)?))
         }
         "thindielectric" => {
             cx.only(&present, &["ior", "ext_ior"], &what)?;
@@ -1100,9 +1101,11 @@ fn material(cx: &Ctx, m: &Spanned<MaterialT>, tex: &Textures) -> Result<Material
         }
         other => return cx.err(t.kind.span(), format!("unknown material type '{other}' (expected lambert, oren_nayar, mirror, dielectric, thindielectric, roughdielectric, conductor, roughconductor, plastic, roughplastic or black)")),
     };
-    let mut m = Material::new(bsdf, two_sided);
-    m.texture = texture;
-    Ok(m)
+    let slots = texture.map(|texture| Binding {
+        texture,
+        slot: MAIN_COLOR,
+    });
+    Ok(Material::new(bsdf, two_sided).with_slots(slots.into_iter().collect()))
 }
 
 fn texture(cx: &Ctx, t: &Spanned<TextureT>, base: &Path) -> Result<Texture, SceneError> {

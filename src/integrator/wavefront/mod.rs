@@ -227,13 +227,19 @@ impl<'a> Wavefront<'a> {
         for (j, &idx) in scene.tris.iter().enumerate() {
             let meta = scene.meta[j];
             let material = &scene.materials[(meta & META_MATERIAL) as usize];
-            if material.texture.is_some() {
+            if material.varies() {
                 return None;
             }
             let (kind, colour) = match &material.bsdf {
                 Bsdf::Lambert(b) => (LAMBERT, b.albedo),
                 Bsdf::Mirror(b) => (MIRROR, b.reflectance),
                 Bsdf::Dielectric(b) => {
+                    // (Glass with factors other than 1 takes the scalar path.)
+                    if b.specular_reflectance != crate::Color::ONE
+                        || b.specular_transmittance != crate::Color::ONE
+                    {
+                        return None;
+                    }
                     w.eta[j] = b.eta;
                     (GLASS, crate::Color::ONE)
                 }

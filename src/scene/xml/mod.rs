@@ -9,6 +9,7 @@
 
 mod document;
 mod objects;
+mod params;
 mod props;
 mod transform;
 
