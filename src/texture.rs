@@ -764,6 +764,39 @@ mod tests {
         assert!(!t.is_constant());
     }
 
+    /// Floats from textures (Mitsuba's `eval_1` and `mean()`): a grey bitmap's value, an RGB
+    /// one's luminance, a constant's channel mean, and the checkerboard's cells swapped.
+    #[test]
+    fn float_lookups_and_means() {
+        let px = [gray(0.25), gray(0.75)];
+        let t = tex(2, 1, &px, FilterType::Nearest, WrapMode::Clamp);
+        assert_eq!(t.eval_1(Vec2::new(0.2, 0.5)), 0.25);
+        assert_eq!(t.eval_1(Vec2::new(0.8, 0.5)), 0.75);
+        assert_eq!(t.mean_1(), 0.5);
+        let red = Color::new(1.0, 0.0, 0.0);
+        let px = [red, Color::new(0.2, 0.4, 0.6)];
+        let t = tex(2, 1, &px, FilterType::Nearest, WrapMode::Repeat);
+        assert_eq!(t.eval_1(Vec2::new(0.2, 0.5)), 0.212_671);
+        let y = 0.2 * 0.212_671 + 0.4 * 0.715_160 + 0.6 * 0.072_169;
+        assert!((t.eval_1(Vec2::new(0.8, 0.5)) - y).abs() < 1e-7);
+        assert!((t.mean_1() - 0.5 * (0.212_671 + y)).abs() < 1e-7);
+        // Bilinear: the luminance of the interpolated colour (linear, so either order).
+        let t = tex(2, 1, &px, FilterType::Bilinear, WrapMode::Clamp);
+        assert!((t.eval_1(Vec2::new(0.5, 0.5)) - 0.5 * (0.212_671 + y)).abs() < 1e-6);
+        let c = Texture::Constant(Color::new(0.1, 0.2, 0.6));
+        assert!((c.eval_1(Vec2::ZERO) - 0.3).abs() < 1e-7 && c.mean_1() == c.eval_1(Vec2::ZERO));
+        let k = Texture::Checkerboard {
+            color0: gray(0.9),
+            color1: Color::new(0.1, 0.2, 0.3),
+            to_uv: UvTransform::IDENTITY,
+        };
+        // eval gives color0 at (¼, ¼); eval_1 gives color1's mean there.
+        assert_eq!(k.eval(Vec2::splat(0.25)), gray(0.9));
+        assert!((k.eval_1(Vec2::splat(0.25)) - 0.2).abs() < 1e-7);
+        assert!((k.eval_1(Vec2::new(0.75, 0.25)) - 0.9).abs() < 1e-7);
+        assert!((k.mean_1() - 0.55).abs() < 1e-7);
+    }
+
     #[test]
     fn from_pixels_rejects_bad_sizes() {
         assert!(Bitmap::from_pixels(0, 1, vec![]).is_err());

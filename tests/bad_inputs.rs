@@ -326,3 +326,23 @@ bad_input!(
 );
 bad_input!(xml_unknown_wrap_mode_xml, "xml-unknown-wrap-mode.xml");
 bad_input!(xml_unknown_filter_type_xml, "xml-unknown-filter-type.xml");
+bad_input!(
+    toml_blend_weight_below_zero_toml,
+    "toml-blend-weight-below-zero.toml"
+);
+bad_input!(
+    toml_blend_contains_itself_toml,
+    "toml-blend-contains-itself.toml"
+);
+bad_input!(
+    toml_blend_three_materials_toml,
+    "toml-blend-three-materials.toml"
+);
+bad_input!(
+    toml_texture_roughplastic_alpha_toml,
+    "toml-texture-roughplastic-alpha.toml"
+);
+bad_input!(
+    toml_unknown_roughness_texture_toml,
+    "toml-unknown-roughness-texture.toml"
+);

@@ -40,6 +40,13 @@ fn toml_textures_obj_and_ply_match_mitsuba() {
     twin_matches_mitsuba("textures", 256, 4096);
 }
 
+/// Textured roughness and plastic reflectances, blends (checkerboard and nested) and
+/// textured area lights, written in the native format.
+#[test]
+fn toml_textured_parameters_and_blends_match_mitsuba() {
+    twin_matches_mitsuba("textured-params", 256, 4096);
+}
+
 fn area(m: &TriangleMesh) -> f32 {
     m.indices
         .iter()

@@ -77,18 +77,83 @@ macro_rules! slot {
     };
 }
 
-/// The main colour of the BSDFs that have one (diffuse reflectance, or a metal's specular
-/// reflectance): what mcrt's TOML scenes may texture.
-pub const MAIN_COLOR: Slot = Slot::Color(|bsdf, c| match bsdf {
-    Bsdf::Lambert(b) => b.albedo = c,
-    Bsdf::OrenNayar(b) => b.albedo = c,
-    Bsdf::Mirror(b) => b.reflectance = c,
-    Bsdf::Conductor(b) => b.specular_reflectance = c,
-    Bsdf::RoughConductor(b) => b.specular_reflectance = c,
-    Bsdf::Plastic(b) => b.diffuse_reflectance = c,
-    Bsdf::RoughPlastic(b) => b.diffuse_reflectance = c,
-    _ => {}
-});
+/// The slots of the parameters the scene readers bind, shared by them.
+pub mod slots {
+    use super::Slot;
+    use crate::material::{Bsdf, Microfacet};
+
+    /// The main colour of the BSDFs that have one (diffuse reflectance, or a metal's specular
+    /// reflectance): what mcrt's TOML scenes may texture.
+    pub const MAIN_COLOR: Slot = Slot::Color(|bsdf, c| match bsdf {
+        Bsdf::Lambert(b) => b.albedo = c,
+        Bsdf::OrenNayar(b) => b.albedo = c,
+        Bsdf::Mirror(b) => b.reflectance = c,
+        Bsdf::Conductor(b) => b.specular_reflectance = c,
+        Bsdf::RoughConductor(b) => b.specular_reflectance = c,
+        Bsdf::Plastic(b) => b.diffuse_reflectance = c,
+        Bsdf::RoughPlastic(b) => b.diffuse_reflectance = c,
+        _ => {}
+    });
+
+    /// Roughness slots of the rough conductor and dielectric (`alpha`, `alpha_u`, `alpha_v`).
+    pub const ALPHA: Slot = Slot::Float(|bsdf, v| {
+        if let Some(d) = distr_mut(bsdf) {
+            d.set_alpha(v, v);
+        }
+    });
+    pub const ALPHA_U: Slot = Slot::Float(|bsdf, v| {
+        if let Some(d) = distr_mut(bsdf) {
+            d.set_alpha_u(v);
+        }
+    });
+    pub const ALPHA_V: Slot = Slot::Float(|bsdf, v| {
+        if let Some(d) = distr_mut(bsdf) {
+            d.set_alpha_v(v);
+        }
+    });
+
+    fn distr_mut(bsdf: &mut Bsdf) -> Option<&mut Microfacet> {
+        match bsdf {
+            Bsdf::RoughConductor(b) => Some(&mut b.distr),
+            Bsdf::RoughDielectric(b) => Some(&mut b.distr),
+            _ => None,
+        }
+    }
+
+    /// `specular_reflectance` of the conductors (a `conductor` of material "none" is a mirror).
+    pub const CONDUCTOR_REFLECTANCE: Slot = Slot::Color(|bsdf, v| match bsdf {
+        Bsdf::Mirror(b) => b.reflectance = v,
+        Bsdf::Conductor(b) => b.specular_reflectance = v,
+        Bsdf::RoughConductor(b) => b.specular_reflectance = v,
+        _ => {}
+    });
+
+    /// `specular_reflectance` and `specular_transmittance` of the dielectrics.
+    pub const DIELECTRIC_REFLECTANCE: Slot = Slot::Color(|bsdf, v| match bsdf {
+        Bsdf::Dielectric(b) => b.specular_reflectance = v,
+        Bsdf::ThinDielectric(b) => b.specular_reflectance = v,
+        Bsdf::RoughDielectric(b) => b.specular_reflectance = v,
+        _ => {}
+    });
+    pub const DIELECTRIC_TRANSMITTANCE: Slot = Slot::Color(|bsdf, v| match bsdf {
+        Bsdf::Dielectric(b) => b.specular_transmittance = v,
+        Bsdf::ThinDielectric(b) => b.specular_transmittance = v,
+        Bsdf::RoughDielectric(b) => b.specular_transmittance = v,
+        _ => {}
+    });
+
+    /// `diffuse_reflectance` and `specular_reflectance` of the plastics.
+    pub const PLASTIC_DIFFUSE: Slot = Slot::Color(|bsdf, v| match bsdf {
+        Bsdf::Plastic(b) => b.diffuse_reflectance = v,
+        Bsdf::RoughPlastic(b) => b.diffuse_reflectance = v,
+        _ => {}
+    });
+    pub const PLASTIC_SPECULAR: Slot = Slot::Color(|bsdf, v| match bsdf {
+        Bsdf::Plastic(b) => b.specular_reflectance = v,
+        Bsdf::RoughPlastic(b) => b.specular_reflectance = v,
+        _ => {}
+    });
+}
 
 impl Material {
     /// This material with `bindings` filling its textured parameters.

@@ -2,13 +2,13 @@
 //! description.
 
 use super::document::{Document, Elem};
-use super::params;
 use super::props::{ColorSrc, Ids, Props, Result};
 use crate::camera::{CameraDesc, FovAxis};
 use crate::geometry::mesh::TriangleMesh;
 use crate::integrator::IntegratorKind;
 use crate::limits;
 use crate::material::conductor::{conductor_ior, conductor_names};
+use crate::material::textured::slots;
 use crate::material::{
     Bsdf, Conductor, Dielectric, Lambert, Material, Mirror, Plastic, RoughConductor,
     RoughDielectric, RoughPlastic, ThinDielectric,
@@ -496,8 +496,8 @@ impl<'a> Builder<'a> {
             "dielectric" | "thindielectric" | "roughdielectric" => {
                 let eta = ior(&p, "int_ior", 1.5046)? / ior(&p, "ext_ior", 1.000277)?;
                 let (r, t) = (
-                    params::DIELECTRIC_REFLECTANCE,
-                    params::DIELECTRIC_TRANSMITTANCE,
+                    slots::DIELECTRIC_REFLECTANCE,
+                    slots::DIELECTRIC_TRANSMITTANCE,
                 );
                 let r = self.color_param(&p, "specular_reflectance", 1.0, &mut slots, r)?;
                 let t = self.color_param(&p, "specular_transmittance", 1.0, &mut slots, t)?;
@@ -521,7 +521,7 @@ impl<'a> Builder<'a> {
             }
             "conductor" | "roughconductor" => {
                 let (eta, k) = self.conductor_ior(&p)?;
-                let r = params::CONDUCTOR_REFLECTANCE;
+                let r = slots::CONDUCTOR_REFLECTANCE;
                 let r = self.color_param(&p, "specular_reflectance", 1.0, &mut slots, r)?;
                 if kind == "conductor" {
                     // `material = "none"` is η = 0, k = 1: Fresnel reflectance 1, a mirror.
@@ -537,7 +537,7 @@ impl<'a> Builder<'a> {
             }
             "plastic" | "roughplastic" => {
                 let eta = ior(&p, "int_ior", 1.49)? / ior(&p, "ext_ior", 1.000277)?;
-                let (d, s) = (params::PLASTIC_DIFFUSE, params::PLASTIC_SPECULAR);
+                let (d, s) = (slots::PLASTIC_DIFFUSE, slots::PLASTIC_SPECULAR);
                 let d = self.color_param(&p, "diffuse_reflectance", 0.5, &mut slots, d)?;
                 let s = self.color_param(&p, "specular_reflectance", 1.0, &mut slots, s)?;
                 let nonlinear = p.bool("nonlinear", false)?;

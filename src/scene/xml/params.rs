@@ -5,67 +5,9 @@
 use super::document::Elem;
 use super::objects::Builder;
 use super::props::{ColorSrc, FloatSrc, Props, Result};
+use crate::material::textured::slots::{ALPHA, ALPHA_U, ALPHA_V};
 use crate::material::{Binding, Blend, Bsdf, Microfacet, MicrofacetType, Slot, MAX_BLEND_DEPTH};
 use crate::Color;
-
-/// Roughness slots of the rough conductor and dielectric (`alpha`, `alpha_u`, `alpha_v`).
-pub(super) const ALPHA: Slot = Slot::Float(|bsdf, v| {
-    if let Some(d) = distr_mut(bsdf) {
-        d.set_alpha(v, v);
-    }
-});
-const ALPHA_U: Slot = Slot::Float(|bsdf, v| {
-    if let Some(d) = distr_mut(bsdf) {
-        d.set_alpha_u(v);
-    }
-});
-const ALPHA_V: Slot = Slot::Float(|bsdf, v| {
-    if let Some(d) = distr_mut(bsdf) {
-        d.set_alpha_v(v);
-    }
-});
-
-fn distr_mut(bsdf: &mut Bsdf) -> Option<&mut Microfacet> {
-    match bsdf {
-        Bsdf::RoughConductor(b) => Some(&mut b.distr),
-        Bsdf::RoughDielectric(b) => Some(&mut b.distr),
-        _ => None,
-    }
-}
-
-/// `specular_reflectance` of the conductors (a `conductor` of material "none" is a mirror).
-pub(super) const CONDUCTOR_REFLECTANCE: Slot = Slot::Color(|bsdf, v| match bsdf {
-    Bsdf::Mirror(b) => b.reflectance = v,
-    Bsdf::Conductor(b) => b.specular_reflectance = v,
-    Bsdf::RoughConductor(b) => b.specular_reflectance = v,
-    _ => {}
-});
-
-/// `specular_reflectance` and `specular_transmittance` of the dielectrics.
-pub(super) const DIELECTRIC_REFLECTANCE: Slot = Slot::Color(|bsdf, v| match bsdf {
-    Bsdf::Dielectric(b) => b.specular_reflectance = v,
-    Bsdf::ThinDielectric(b) => b.specular_reflectance = v,
-    Bsdf::RoughDielectric(b) => b.specular_reflectance = v,
-    _ => {}
-});
-pub(super) const DIELECTRIC_TRANSMITTANCE: Slot = Slot::Color(|bsdf, v| match bsdf {
-    Bsdf::Dielectric(b) => b.specular_transmittance = v,
-    Bsdf::ThinDielectric(b) => b.specular_transmittance = v,
-    Bsdf::RoughDielectric(b) => b.specular_transmittance = v,
-    _ => {}
-});
-
-/// `diffuse_reflectance` and `specular_reflectance` of the plastics.
-pub(super) const PLASTIC_DIFFUSE: Slot = Slot::Color(|bsdf, v| match bsdf {
-    Bsdf::Plastic(b) => b.diffuse_reflectance = v,
-    Bsdf::RoughPlastic(b) => b.diffuse_reflectance = v,
-    _ => {}
-});
-pub(super) const PLASTIC_SPECULAR: Slot = Slot::Color(|bsdf, v| match bsdf {
-    Bsdf::Plastic(b) => b.specular_reflectance = v,
-    Bsdf::RoughPlastic(b) => b.specular_reflectance = v,
-    _ => {}
-});
 
 impl<'a> Builder<'a> {
     /// A colour parameter: a constant, or a texture bound to `slot` (pushed to `slots`);
