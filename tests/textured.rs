@@ -51,7 +51,9 @@ fn xml_parameters_take_textures() {
         <shape type="sphere"><bsdf type="thindielectric"><ref name="specular_reflectance" id="c"/></bsdf></shape>
         <shape type="sphere"><bsdf type="dielectric"><ref name="specular_transmittance" id="c"/></bsdf></shape>
         <shape type="sphere"><bsdf type="roughplastic"><ref name="diffuse_reflectance" id="c"/><ref name="specular_reflectance" id="c"/></bsdf></shape>
-        <shape type="sphere"><bsdf type="conductor"><ref name="specular_reflectance" id="c"/></bsdf></shape>"#,
+        <shape type="sphere"><bsdf type="conductor"><ref name="specular_reflectance" id="c"/></bsdf></shape>
+        <shape type="sphere"><bsdf type="conductor"><ref name="eta" id="c"/><rgb name="k" value="2"/></bsdf></shape>
+        <shape type="sphere"><bsdf type="roughconductor"><rgb name="eta" value="0.2"/><ref name="k" id="c"/></bsdf></shape>"#,
     );
     let s = Scene::build(d);
     let c0 = Color::new(0.9, 0.5, 0.1);
@@ -93,6 +95,14 @@ fn xml_parameters_take_textures() {
         }
         match at(5) {
             Bsdf::Mirror(b) => assert_eq!(b.reflectance, c),
+            b => panic!("{b:?}"),
+        }
+        match at(6) {
+            Bsdf::Conductor(b) => assert_eq!((b.eta, b.k), (c, Color::splat(2.0))),
+            b => panic!("{b:?}"),
+        }
+        match at(7) {
+            Bsdf::RoughConductor(b) => assert_eq!((b.eta, b.k), (Color::splat(0.2), c)),
             b => panic!("{b:?}"),
         }
     }

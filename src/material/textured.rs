@@ -128,6 +128,18 @@ pub mod slots {
         _ => {}
     });
 
+    /// A conductor's complex index of refraction η + ik (`eta`, `k`).
+    pub const CONDUCTOR_ETA: Slot = Slot::Color(|bsdf, v| match bsdf {
+        Bsdf::Conductor(b) => b.eta = v,
+        Bsdf::RoughConductor(b) => b.eta = v,
+        _ => {}
+    });
+    pub const CONDUCTOR_K: Slot = Slot::Color(|bsdf, v| match bsdf {
+        Bsdf::Conductor(b) => b.k = v,
+        Bsdf::RoughConductor(b) => b.k = v,
+        _ => {}
+    });
+
     /// `specular_reflectance` and `specular_transmittance` of the dielectrics.
     pub const DIELECTRIC_REFLECTANCE: Slot = Slot::Color(|bsdf, v| match bsdf {
         Bsdf::Dielectric(b) => b.specular_reflectance = v,

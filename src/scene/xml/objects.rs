@@ -430,7 +430,12 @@ impl<'a> Builder<'a> {
     }
 
     /// A conductor's complex index of refraction: a named `material`, or `eta` and `k`.
-    fn conductor_ior(&mut self, p: &Props<'a>) -> Result<(Color, Color)> {
+    /// (`eta` and `k` may be textures, bound through `slots`.)
+    fn conductor_ior(
+        &mut self,
+        p: &Props<'a>,
+        slots: &mut Vec<crate::material::Binding>,
+    ) -> Result<(Color, Color)> {
         let e = p.owner;
         let named = p.string_opt("material")?;
         if p.has("eta") || p.has("k") {
@@ -439,7 +444,9 @@ impl<'a> Builder<'a> {
                     .doc
                     .err(e, "give either 'material' or 'eta' and 'k', not both"));
             }
-            return Ok((p.color("eta", Color::ZERO)?, p.color("k", Color::ONE)?));
+            let eta = self.color_param(p, "eta", 0.0, slots, slots::CONDUCTOR_ETA)?;
+            let k = self.color_param(p, "k", 1.0, slots, slots::CONDUCTOR_K)?;
+            return Ok((eta, k));
         }
         let name = named.unwrap_or("none");
         conductor_ior(name).ok_or_else(|| {
@@ -520,12 +527,13 @@ impl<'a> Builder<'a> {
                 }
             }
             "conductor" | "roughconductor" => {
-                let (eta, k) = self.conductor_ior(&p)?;
+                let (eta, k) = self.conductor_ior(&p, &mut slots)?;
+                let textured_ior = !slots.is_empty();
                 let r = slots::CONDUCTOR_REFLECTANCE;
                 let r = self.color_param(&p, "specular_reflectance", 1.0, &mut slots, r)?;
                 if kind == "conductor" {
                     // `material = "none"` is η = 0, k = 1: Fresnel reflectance 1, a mirror.
-                    if eta == Color::ZERO && k == Color::ONE {
+                    if eta == Color::ZERO && k == Color::ONE && !textured_ior {
                         Bsdf::Mirror(Mirror { reflectance: r })
                     } else {
                         Bsdf::Conductor(Conductor::new(eta, k, r))
