@@ -31,6 +31,7 @@ fn hit(m: u32, uv: Vec2) -> Interaction {
         p_err: Vec3A::ZERO,
         ng: Vec3A::Z,
         ns: Vec3A::Z,
+        ns_base: Vec3A::Z,
         t: 1.0,
         uv,
         material: m,

@@ -66,10 +66,8 @@ pub(super) fn resolve(
         return parts.pop().expect("one part").material;
     }
     Material {
-        bsdf: Bsdf::Blend(blend),
-        two_sided,
-        slots: Box::default(),
         mix: Some(parts.into_boxed_slice()),
+        ..Material::new(Bsdf::Blend(blend), two_sided)
     }
 }
 
@@ -119,6 +117,7 @@ fn flatten(
                     two_sided: sided,
                     slots: Box::default(),
                     mix: None,
+                    ..*m
                 },
                 weight: share * weight,
             }),

@@ -196,10 +196,9 @@ impl Material {
     #[inline(always)]
     pub(crate) fn constant(&self) -> Material {
         Material {
-            bsdf: self.bsdf,
-            two_sided: self.two_sided,
             slots: Box::default(),
             mix: None,
+            ..*self
         }
     }
 
@@ -221,9 +220,9 @@ impl Material {
             }
             bsdf => Material {
                 bsdf,
-                two_sided: self.two_sided,
                 slots: Box::default(),
                 mix: None,
+                ..*self
             },
         }
     }
