@@ -16,14 +16,17 @@
 //!
 //! # Adding a textured parameter
 //!
-//! One line where the parser reads it: pass a slot made by [`slot!`], which names the
-//! BSDF variant, how the texture is read, and the assignment:
+//! One line where the reader reads it: pass a slot, made by [`crate::slot!`] (the BSDF variant,
+//! how the texture is read, the assignment) or one of [`slots`] (shared by the XML and TOML
+//! readers, for fields several variants have), to the XML reader's `color_param` or
+//! `float_param_opt` (src/scene/xml/params.rs), which binds a texture or returns the
+//! constant:
 //!
 //! ```ignore
-//! let r = b.color_param(&p, "specular_reflectance", 1.0, &mut slots,
+//! let r = self.color_param(&p, "specular_reflectance", 1.0, &mut slots,
 //!     slot!(Color, RoughConductor, |b, v| b.specular_reflectance = v))?;
-//! let a = b.float_param(&p, "alpha", 0.1, &mut slots,
-//!     slot!(Float, RoughConductor, |b, v| b.distr.set_alpha(v)))?;
+//! let w = self.float_param_opt(&p, "weight", &mut slots,
+//!     slot!(Float, Blend, |b, v| b.weight = v))?;
 //! ```
 //!
 //! and give the material its bindings (`Material::with_slots`). A value a slot writes must
