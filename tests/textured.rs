@@ -163,7 +163,7 @@ fn dielectric_factors_scale_their_lobes() {
 #[test]
 fn textured_light_samples_match_hits() {
     let d = scene(
-        r#"<texture type="bitmap" id="glow"><string name="filename" value="glow.exr"/><string name="filter_type" value="nearest"/></texture>
+        r#"<texture type="bitmap" id="glow"><string name="filename" value="glow.exr"/><string name="filter_type" value="nearest"/><boolean name="accel" value="false"/></texture>
         <shape type="rectangle">
             <transform name="to_world"><scale x="2" y="1"/><rotate x="1" angle="90"/><translate y="3"/></transform>
             <emitter type="area"><ref name="radiance" id="glow"/></emitter>

@@ -371,7 +371,9 @@ impl<'a> Builder<'a> {
                     )
                 })?;
                 b.to_uv = to_uv;
+                // Storage precision, and CUDA's hardware lookups: no effect on the values.
                 p.ignore("format");
+                p.ignore("accel");
                 Texture::Bitmap(b)
             }
             "checkerboard" => Texture::Checkerboard {
