@@ -511,3 +511,44 @@ bad_input!(
     xml_principledthin_metallic_xml,
     "xml-principledthin-metallic.xml"
 );
+bad_input!(xml_texture_on_ior_xml, "xml-texture-on-ior.xml");
+bad_input!(
+    xml_texture_roughplastic_alpha_xml,
+    "xml-texture-roughplastic-alpha.xml"
+);
+bad_input!(
+    xml_blend_weight_above_one_xml,
+    "xml-blend-weight-above-one.xml"
+);
+bad_input!(xml_blend_one_child_xml, "xml-blend-one-child.xml");
+bad_input!(xml_blend_without_weight_xml, "xml-blend-without-weight.xml");
+bad_input!(
+    xml_blend_nested_too_deep_xml,
+    "xml-blend-nested-too-deep.xml"
+);
+bad_input!(
+    xml_blend_contains_itself_xml,
+    "xml-blend-contains-itself.xml"
+);
+bad_input!(xml_unknown_wrap_mode_xml, "xml-unknown-wrap-mode.xml");
+bad_input!(xml_unknown_filter_type_xml, "xml-unknown-filter-type.xml");
+bad_input!(
+    toml_blend_weight_below_zero_toml,
+    "toml-blend-weight-below-zero.toml"
+);
+bad_input!(
+    toml_blend_contains_itself_toml,
+    "toml-blend-contains-itself.toml"
+);
+bad_input!(
+    toml_blend_three_materials_toml,
+    "toml-blend-three-materials.toml"
+);
+bad_input!(
+    toml_texture_roughplastic_alpha_toml,
+    "toml-texture-roughplastic-alpha.toml"
+);
+bad_input!(
+    toml_unknown_roughness_texture_toml,
+    "toml-unknown-roughness-texture.toml"
+);

@@ -181,19 +181,19 @@ fn chi2_principled() {
         ("default", principled(P), dir(0.0, 0.3)),
         ("default", principled(P), dir(45.0, 0.3)),
         ("default", principled(P), dir(80.0, 0.3)),
-        ("metal", metal, dir(30.0, 1.0)),
-        ("metal", metal, dir(70.0, 2.0)),
-        ("glass", glass, dir(30.0, 0.5)),
-        ("glass", glass, dir(65.0, 0.5)),
-        ("glass inside", glass, flip(dir(40.0, 0.5))),
-        ("clearcoat", coat, dir(20.0, 0.1)),
-        ("clearcoat", coat, dir(60.0, 0.1)),
+        ("metal", metal.clone(), dir(30.0, 1.0)),
+        ("metal", metal.clone(), dir(70.0, 2.0)),
+        ("glass", glass.clone(), dir(30.0, 0.5)),
+        ("glass", glass.clone(), dir(65.0, 0.5)),
+        ("glass inside", glass.clone(), flip(dir(40.0, 0.5))),
+        ("clearcoat", coat.clone(), dir(20.0, 0.1)),
+        ("clearcoat", coat.clone(), dir(60.0, 0.1)),
         ("all", principled(ALL), dir(45.0, 0.8)),
         ("all inside", principled(ALL), flip(dir(30.0, 0.8))),
-        ("eta 0.8", low_eta, dir(40.0, 0.2)),
-        ("eta 0.8 inside", low_eta, flip(dir(40.0, 0.2))),
-        ("rates", rates, dir(50.0, 0.4)),
-        ("two-sided from behind", two_sided, flip(dir(50.0, 0.4))),
+        ("eta 0.8", low_eta.clone(), dir(40.0, 0.2)),
+        ("eta 0.8 inside", low_eta.clone(), flip(dir(40.0, 0.2))),
+        ("rates", rates.clone(), dir(50.0, 0.4)),
+        ("two-sided from behind", two_sided.clone(), flip(dir(50.0, 0.4))),
     ];
     chi2_cases(&cases, 100);
 }
@@ -223,11 +223,11 @@ fn chi2_principled_thin() {
         ..T
     });
     let cases = [
-        ("thin all", all, dir(30.0, 0.6)),
-        ("thin all from behind", all, flip(dir(60.0, 0.6))),
-        ("thin leaf", leaf, dir(45.0, 1.1)),
-        ("thin glass", glass, dir(30.0, 2.1)),
-        ("thin glass from behind", glass, flip(dir(50.0, 2.1))),
+        ("thin all", all.clone(), dir(30.0, 0.6)),
+        ("thin all from behind", all.clone(), flip(dir(60.0, 0.6))),
+        ("thin leaf", leaf.clone(), dir(45.0, 1.1)),
+        ("thin glass", glass.clone(), dir(30.0, 2.1)),
+        ("thin glass from behind", glass.clone(), flip(dir(50.0, 2.1))),
         ("thin default", thin(T), dir(75.0, 0.0)),
     ];
     chi2_cases(&cases, 200);

@@ -37,6 +37,14 @@ fn beckmann_rough_bsdfs_by_default() {
     feature_matches_mitsuba("beckmann", 512, 4096);
 }
 
+/// Textures on float and colour parameters (roughness from a raw PNG with clamp wrap, a
+/// checkerboard blend weight, plastic reflectances), nested blends and textured area lights
+/// (a rectangle and a sphere).
+#[test]
+fn textured_parameters_blends_and_emission() {
+    feature_matches_mitsuba("textured-params", 256, 4096);
+}
+
 /// `spot`: default and given beam widths (linear falloff between beam and cutoff), a
 /// projected PNG texture, frames by lookat and by rotations.
 #[test]

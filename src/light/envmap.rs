@@ -27,11 +27,7 @@ use crate::Color;
 use glam::{Mat3, Mat3A, Vec2, Vec3A};
 use std::f32::consts::PI;
 
-/// Mitsuba's `luminance` (Rec. 709 / sRGB primaries).
-#[inline]
-fn luminance(c: Color) -> f32 {
-    0.212_671 * c.x + 0.715_160 * c.y + 0.072_169 * c.z
-}
+use crate::texture::luminance;
 
 /// An environment map, ready to evaluate and sample.
 #[derive(Clone, Debug)]

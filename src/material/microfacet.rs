@@ -81,6 +81,22 @@ impl Microfacet {
         }
     }
 
+    /// Sets the roughness (a textured one, per hit), clamped as [`Microfacet::new`] does.
+    #[inline]
+    pub fn set_alpha(&mut self, alpha_u: f32, alpha_v: f32) {
+        *self = Self::new(self.kind, alpha_u, alpha_v);
+    }
+
+    #[inline]
+    pub fn set_alpha_u(&mut self, alpha_u: f32) {
+        self.set_alpha(alpha_u, self.alpha_v);
+    }
+
+    #[inline]
+    pub fn set_alpha_v(&mut self, alpha_v: f32) {
+        self.set_alpha(self.alpha_u, alpha_v);
+    }
+
     pub fn ggx(alpha_u: f32, alpha_v: f32) -> Self {
         Self::new(MicrofacetType::Ggx, alpha_u, alpha_v)
     }

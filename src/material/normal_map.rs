@@ -11,7 +11,6 @@
 
 use crate::geometry::Frame;
 use crate::texture::{Bitmap, FilterType, Texture};
-use crate::Color;
 use glam::{Vec2, Vec3A};
 
 /// A `bumpmap`'s height texture and the `scale` its gradient is multiplied by.
@@ -38,10 +37,7 @@ pub struct HitGeometry {
 }
 
 /// Rec. 709 luminance: how Mitsuba reads an RGB texture as one number (`eval_1`).
-#[inline]
-pub fn luminance(c: Color) -> f32 {
-    c.dot(Color::new(0.212671, 0.715160, 0.072169))
-}
+pub use crate::texture::luminance;
 
 /// The shading frame Mitsuba builds at a hit: the normal `n`, and the tangent `dpdu` made
 /// orthogonal to it (an arbitrary one where `dpdu` is parallel to `n` or zero).
@@ -182,6 +178,7 @@ fn tan2(c: f32) -> f32 {
 mod tests {
     use super::*;
     use crate::texture::{BitmapTexture, UvTransform, WrapMode};
+    use crate::Color;
     use std::sync::Arc;
 
     fn bitmap(w: u32, h: u32, px: Vec<Color>) -> Texture {

@@ -223,10 +223,12 @@ fn trace_one(
     };
     let (mut ray, mut power) = match scene.lights.lights.get(id) {
         Some(light) => {
-            let (p, nl, err) = light.sample_point(s.next_2d());
+            let u = s.next_2d();
+            let (p, nl, err) = light.sample_point(u);
             let d = Frame::from_normal(nl).to_world(square_to_cosine_hemisphere(s.next_2d()));
             // Le·cos / (pmf · 1/A · cos/π) / n
-            let power = light.radiance * (std::f32::consts::PI * light.area / (pmf * n as f32));
+            let le = scene.lights.radiance_of_sample(id, u, nl);
+            let power = le * (std::f32::consts::PI * light.area / (pmf * n as f32));
             (Ray::new(offset_ray_origin(p, err, nl, d), d), power)
         }
         None => {

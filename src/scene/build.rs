@@ -33,8 +33,15 @@ impl Scene {
         // (primitive, light) of the emitting primitives, by primitive.
         let mut emitting: Vec<(u32, u32)> = Vec::new();
         // (Shapes are taken by value: the first mesh's arrays become the scene's, uncopied.)
-        for shape in std::mem::take(&mut desc.shapes) {
-            let emission = shape.emission.filter(|e| e.max_element() > 0.0);
+        for (index, shape) in std::mem::take(&mut desc.shapes).into_iter().enumerate() {
+            let emission_texture = desc
+                .emission_textures
+                .iter()
+                .find(|&&(s, _)| s == index)
+                .map(|&(_, t)| t);
+            let emission = shape
+                .emission
+                .filter(|e| e.max_element() > 0.0 || emission_texture.is_some());
             assert!(shape.material <= META_MATERIAL, "too many materials");
             let mut m = shape.material;
             if emission.is_some() {
@@ -55,7 +62,8 @@ impl Scene {
                     // (A normal or bump map needs the flag for its partials, with or
                     // without texture coordinates.)
                     let mat = desc.materials.get(shape.material as usize);
-                    let textured = mat.is_some_and(|mat| mat.reads_uv());
+                    let textured =
+                        emission_texture.is_some() || mat.is_some_and(|mat| mat.reads_uv());
                     let perturbs = mat.is_some_and(|mat| mat.perturbs());
                     if mesh.normals.is_some() || (mesh.uvs.is_some() && textured) || perturbs {
                         m |= META_ATTRS;
@@ -102,7 +110,33 @@ impl Scene {
                                 Triangle::new(a, b, c)
                             })
                             .collect();
-                        for (k, light) in mesh_lights(&kept_tris, e, &mut lights).enumerate() {
+                        let ids: Vec<u32> = match emission_texture {
+                            None => mesh_lights(&kept_tris, e, &mut lights).collect(),
+                            Some(t) => {
+                                // Barycentric coordinates stand in for missing uvs, as at a hit.
+                                let uv = |i: u32| {
+                                    mesh.uvs
+                                        .as_ref()
+                                        .map_or(glam::Vec2::ZERO, |u| u[(i - base) as usize])
+                                };
+                                let corners = [glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::Y];
+                                kept.iter()
+                                    .zip(&kept_tris)
+                                    .map(|(idx, tri)| {
+                                        let uvs = match mesh.uvs {
+                                            Some(_) => idx.map(uv),
+                                            None => corners,
+                                        };
+                                        lights.push(
+                                            AreaLight::new(LightShape::Triangle(*tri), e)
+                                                .with_texture(t, uvs),
+                                        );
+                                        (lights.len() - 1) as u32
+                                    })
+                                    .collect()
+                            }
+                        };
+                        for (k, light) in ids.into_iter().enumerate() {
                             emitting.push(((tris.len() + k) as u32, light));
                         }
                     }
@@ -141,7 +175,10 @@ impl Scene {
                     radius,
                 };
                 if let Some(e) = emission {
-                    let light = AreaLight::new(LightShape::Sphere(s), e);
+                    let mut light = AreaLight::new(LightShape::Sphere(s), e);
+                    if let Some(t) = emission_texture {
+                        light = light.with_texture(t, light.uvs);
+                    }
                     lights.push(if frame.flip { light.inward() } else { light });
                     emitting.push((tris.len() as u32, (lights.len() - 1) as u32));
                 }
@@ -258,7 +295,13 @@ impl Scene {
             attrs,
             bvh: wide,
             materials: desc.materials,
-            lights: Lights::with_others(lights, others, radius),
+            lights: Lights::with_others(lights, others, radius).with_textures(
+                if desc.emission_textures.is_empty() {
+                    Vec::new()
+                } else {
+                    desc.textures.clone()
+                },
+            ),
             textures: desc.textures,
             cameras: desc.cameras,
             desc_settings: desc.settings,

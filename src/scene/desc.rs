@@ -96,6 +96,9 @@ pub struct SceneDesc {
     pub lights: Vec<LightDesc>,
     /// Textures that materials refer to by index.
     pub textures: Vec<crate::texture::Texture>,
+    /// (shape index, texture) of the area lights whose radiance is a texture, by shape;
+    /// their `ShapeDesc::emission` is the texture's mean.
+    pub emission_textures: Vec<(usize, u32)>,
     /// Things the loader accepted but rendered differently, one line each with file:line:col.
     pub warnings: Vec<String>,
 }

@@ -24,7 +24,7 @@ use crate::accel::{ShadowPacket, WideBvh, PACKET};
 use crate::camera::CameraDesc;
 use crate::geometry::ray::{offset_ray_origin, SHADOW_EPSILON};
 use crate::geometry::{Ray, Sphere, Triangle};
-use crate::light::Lights;
+use crate::light::{Lights, NO_TEXTURE};
 use crate::material::Material;
 use glam::{Vec2, Vec3A, Vec4};
 
@@ -324,7 +324,9 @@ impl Scene {
             // The angles only where a texture reads them (an arctangent and an arccosine),
             // in the sphere's own frame (Mitsuba's sphere.cpp).
             let mat = &self.materials[material as usize];
-            let uv = if mat.reads_uv() {
+            let uv = if mat.reads_uv()
+                || (light != NO_LIGHT && self.lights.lights[light as usize].texture != NO_TEXTURE)
+            {
                 sphere_uv(frame.local(n))
             } else {
                 Vec2::ZERO
@@ -526,19 +528,18 @@ impl Scene {
         self
     }
 
-    /// The material at a hit, its texture (if any) evaluated there.
+    /// The material at a hit: its textured parameters evaluated there, a blend resolved
+    /// ([`Material::at`]).
     #[inline]
     pub fn material_at(&self, si: &Interaction) -> Material {
-        let mut m = self.materials[si.material as usize];
-        if let Some(t) = m.texture {
-            m = m.with_color(self.textures[t as usize].eval(si.uv));
-        }
+        let m = &self.materials[si.material as usize];
+        let mut hit = m.at(&self.materials, &self.textures, si.uv);
         if m.perturbs() {
-            m.perturbed = Some(crate::material::normal_map::Perturbed::new(
+            hit.perturbed = Some(crate::material::normal_map::Perturbed::new(
                 si.ns, si.ns_base,
             ));
         }
-        m
+        hit
     }
 
     /// The mesh texture coordinates of triangle `idx`'s vertices, if its mesh has them
@@ -569,16 +570,4 @@ impl Scene {
 }
 
 /// Texture coordinates on a sphere at unit normal `n` (Mitsuba's): (φ/2π, θ/π).
-#[inline]
-fn sphere_uv(n: Vec3A) -> Vec2 {
-    let phi = n.y.atan2(n.x);
-    let phi = if phi < 0.0 {
-        phi + std::f32::consts::TAU
-    } else {
-        phi
-    };
-    Vec2::new(
-        phi / std::f32::consts::TAU,
-        n.z.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
-    )
-}
+pub(crate) use crate::geometry::sphere::uv_of_normal as sphere_uv;

@@ -242,6 +242,12 @@ impl<'a> Wavefront<'a> {
                 Bsdf::Lambert(b) => (LAMBERT, b.albedo),
                 Bsdf::Mirror(b) => (MIRROR, b.reflectance),
                 Bsdf::Dielectric(b) => {
+                    // (Glass with factors other than 1 takes the scalar path.)
+                    if b.specular_reflectance != crate::Color::ONE
+                        || b.specular_transmittance != crate::Color::ONE
+                    {
+                        return None;
+                    }
                     w.eta[j] = b.eta;
                     (GLASS, crate::Color::ONE)
                 }

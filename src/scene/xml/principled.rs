@@ -46,16 +46,16 @@ impl<'a> Builder<'a> {
         Ok(v)
     }
 
-    /// The BSDF of a `principled` or `principledthin` element; `texture` receives the base
-    /// colour's texture, if it has one.
+    /// The BSDF of a `principled` or `principledthin` element; a base colour texture is
+    /// bound in `slots`.
     pub(super) fn principled(
         &mut self,
         p: &Props<'a>,
         kind: &str,
-        texture: &mut Option<u32>,
+        slots: &mut Vec<crate::material::Binding>,
     ) -> Result<Bsdf> {
-        let (base_color, tex) = self.color_param(p, "base_color", 0.5)?;
-        *texture = tex;
+        let main = crate::material::textured::slots::MAIN_COLOR;
+        let base_color = self.color_param(p, "base_color", 0.5, slots, main)?;
         let mut w = [0.0f32; UNIT_WEIGHTS.len()];
         for (slot, (name, default)) in w.iter_mut().zip(UNIT_WEIGHTS) {
             *slot = self.float_in(p, name, default, 1.0)?;
