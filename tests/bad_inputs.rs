@@ -305,3 +305,39 @@ bad_input!(
     toml_rr_survival_one_minus_ulp_toml,
     "toml-rr-survival-one-minus-ulp.toml"
 );
+
+bad_input!(
+    xml_instance_projective_to_world_xml,
+    "xml-instance-projective-to-world.xml"
+);
+bad_input!(
+    xml_instance_ref_not_shapegroup_xml,
+    "xml-instance-ref-not-shapegroup.xml"
+);
+bad_input!(
+    xml_instance_ref_to_plain_shape_xml,
+    "xml-instance-ref-to-plain-shape.xml"
+);
+bad_input!(
+    xml_instance_singular_to_world_xml,
+    "xml-instance-singular-to-world.xml"
+);
+bad_input!(
+    xml_instance_two_shapegroups_xml,
+    "xml-instance-two-shapegroups.xml"
+);
+bad_input!(xml_instance_unknown_id_xml, "xml-instance-unknown-id.xml");
+bad_input!(
+    xml_instance_without_shapegroup_xml,
+    "xml-instance-without-shapegroup.xml"
+);
+bad_input!(
+    xml_shapegroup_bsdf_child_xml,
+    "xml-shapegroup-bsdf-child.xml"
+);
+bad_input!(xml_shapegroup_emitter_xml, "xml-shapegroup-emitter.xml");
+bad_input!(xml_shapegroup_nested_xml, "xml-shapegroup-nested.xml");
+bad_input!(
+    xml_shapegroup_with_instance_xml,
+    "xml-shapegroup-with-instance.xml"
+);

@@ -36,3 +36,9 @@ fn textures_meshes_and_includes() {
 fn beckmann_rough_bsdfs_by_default() {
     feature_matches_mitsuba("beckmann", 512, 4096);
 }
+
+/// Shape groups placed by instances under rotations, non-uniform and mirroring scales.
+#[test]
+fn shapegroups_and_instances() {
+    feature_matches_mitsuba("instances", 256, 4096);
+}

@@ -188,7 +188,12 @@ impl<'a> Wavefront<'a> {
         // BVH, which for a grazing ray may skip a primitive brute force would test. So the
         // lanes, which test every primitive, match it only where it does too.
         let n = scene.tris.len();
-        if n == 0 || n > MAX_PRIMS || !scene.is_flat() || !scene.attrs.is_empty() {
+        if n == 0
+            || n > MAX_PRIMS
+            || !scene.is_flat()
+            || !scene.attrs.is_empty()
+            || scene.instances.is_some()
+        {
             return None;
         }
         let planar = scene.lights.single_planar()?;

@@ -31,7 +31,12 @@ struct Builder<'a> {
     materials: HashMap<*const Elem, u32>,
     textures: HashMap<*const Elem, u32>,
     default_material: Option<u32>,
+    /// Index in `desc.groups` of each shape group element already built.
+    groups: HashMap<*const Elem, u32>,
 }
+
+#[path = "instance.rs"]
+mod instance;
 
 pub fn build(doc: &Document, lenient: bool) -> Result<SceneDesc> {
     let mut b = Builder {
@@ -42,6 +47,7 @@ pub fn build(doc: &Document, lenient: bool) -> Result<SceneDesc> {
         materials: HashMap::new(),
         textures: HashMap::new(),
         default_material: None,
+        groups: HashMap::new(),
     };
     let scene = Props::new(doc, &b.ids, &doc.root)?;
     let mut sensors = 0;
@@ -598,6 +604,9 @@ impl<'a> Builder<'a> {
     fn shape(&mut self, e: &'a Elem) -> Result<()> {
         let p = self.props(e)?;
         let kind = p.kind()?;
+        if let Some(done) = self.instancing(e, &p, kind) {
+            return done;
+        }
         let m = p.transform("to_world")?;
         let flip = p.bool("flip_normals", false)?;
         let geometry = match kind {
@@ -690,7 +699,7 @@ impl<'a> Builder<'a> {
                     "type",
                     format!(
                         "shape '{kind}' is not supported; mcrt has obj, ply, rectangle, cube, \
-                         sphere and disk"
+                         sphere, disk, shapegroup and instance"
                     ),
                 ))
             }
