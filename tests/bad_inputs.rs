@@ -341,3 +341,13 @@ bad_input!(
     xml_shapegroup_with_instance_xml,
     "xml-shapegroup-with-instance.xml"
 );
+bad_input!(toml_group_emission_toml, "toml-group-emission.toml");
+bad_input!(
+    toml_instance_matrix_and_scale_toml,
+    "toml-instance-matrix-and-scale.toml"
+);
+bad_input!(toml_instance_singular_toml, "toml-instance-singular.toml");
+bad_input!(
+    toml_instance_unknown_group_toml,
+    "toml-instance-unknown-group.toml"
+);

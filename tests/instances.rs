@@ -392,3 +392,78 @@ fn a_thousand_instances_take_less_memory_than_two_flattened_copies() {
     let line = inst.instancing_summary().unwrap();
     assert!(line.contains("1000 instances"), "{line}");
 }
+
+/// The TOML format's groups and instances describe what the same XML does: the shapes of a
+/// group stored once, instances with the same transforms (scale, then rotate, then
+/// translate; or a matrix).
+#[test]
+fn toml_groups_and_instances_match_the_xml_ones() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mitsuba/features");
+    let xml = mcrt::scene::xml::parse_xml(
+        &dir.join("inline.xml"),
+        r#"<scene version="3.0.0">
+            <shape type="shapegroup" id="g">
+                <shape type="sphere"><float name="radius" value="0.5"/></shape>
+                <shape type="ply"><string name="filename" value="pyramid.ply"/></shape>
+            </shape>
+            <shape type="instance"><ref id="g"/>
+                <transform name="to_world">
+                    <scale x="2" y="1" z="0.5"/><rotate x="1" y="1" angle="30"/><translate x="3" z="-1"/>
+                </transform>
+            </shape>
+            <shape type="instance"><ref id="g"/>
+                <transform name="to_world"><matrix value="0 -1 0 1  1 0 0 2  0 0 1 3  0 0 0 1"/></transform>
+            </shape>
+            <shape type="sphere"/>
+        </scene>"#,
+        &Default::default(),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let toml = mcrt::scene::toml::parse_toml(
+        &dir.join("inline.toml"),
+        r#"
+            [[shape]]
+            type = "sphere"
+            center = [0, 0, 0]
+            radius = 0.5
+            group = "g"
+
+            [[shape]]
+            type = "mesh"
+            file = "pyramid.ply"
+            group = "g"
+            smooth = true
+
+            [[shape]]
+            type = "sphere"
+            center = [0, 0, 0]
+            radius = 1
+
+            [[instance]]
+            group = "g"
+            scale = [2, 1, 0.5]
+            rotate = [1, 1, 0, 30]
+            translate = [3, 0, -1]
+
+            [[instance]]
+            group = "g"
+            matrix = [[0, -1, 0, 1], [1, 0, 0, 2], [0, 0, 1, 3]]
+        "#,
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    for d in [&xml, &toml] {
+        assert_eq!(d.shapes.len(), 1);
+        assert_eq!(d.groups.len(), 1);
+        assert_eq!(d.groups[0].shapes.len(), 2);
+        assert_eq!(d.instances.len(), 2);
+    }
+    for (a, b) in xml.instances.iter().zip(&toml.instances) {
+        assert_eq!(a.group, b.group);
+        assert!(
+            a.to_world.abs_diff_eq(b.to_world, 1e-5),
+            "{:?} {:?}",
+            a.to_world,
+            b.to_world
+        );
+    }
+}

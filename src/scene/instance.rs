@@ -184,7 +184,7 @@ fn transform_error(m: &Affine3A, p_abs: Vec3A) -> Vec3A {
 
 impl Placed {
     #[inline]
-    fn to_local(&self, ray: &Ray) -> Ray {
+    fn ray_in_object_space(&self, ray: &Ray) -> Ray {
         Ray::new(
             self.to_object.transform_point3a(ray.o),
             self.to_object.transform_vector3a(ray.d),
@@ -192,7 +192,7 @@ impl Placed {
     }
 
     /// The shadow packet in object space (the shared origin stays shared).
-    fn to_local_packet(&self, pk: &ShadowPacket) -> ShadowPacket {
+    fn packet_in_object_space(&self, pk: &ShadowPacket) -> ShadowPacket {
         let m = self.to_object.matrix3;
         let mut out = *pk;
         out.o = self.to_object.transform_point3a(pk.o);
@@ -206,7 +206,7 @@ impl Placed {
     }
 
     /// An object-space hit in world space.
-    fn to_world(&self, si: Interaction) -> Interaction {
+    fn hit_in_world(&self, si: Interaction) -> Interaction {
         let m = &self.to_world;
         let p = m.transform_point3a(si.p);
         // The object-space error carried through M (with M's own rounding of it), the error
@@ -257,7 +257,7 @@ impl Instances {
         self.tlas.intersect(ray, t_max, |k, t_max| {
             let inst = &self.placed[k];
             let group = &self.groups[inst.group as usize].scene;
-            let (i, u, v, t) = group.closest(&inst.to_local(ray), t_max)?;
+            let (i, u, v, t) = group.closest(&inst.ray_in_object_space(ray), t_max)?;
             (t < t_max).then(|| {
                 best = Some((k, i, u, v, t));
                 t
@@ -266,9 +266,11 @@ impl Instances {
         let (k, i, u, v, t) = best?;
         let inst = &self.placed[k];
         let group = &self.groups[inst.group as usize];
-        let mut si = group.scene.interaction(&inst.to_local(ray), i, u, v, t);
+        let mut si = group
+            .scene
+            .interaction(&inst.ray_in_object_space(ray), i, u, v, t);
         si.material = group.materials[si.material as usize];
-        Some(inst.to_world(si))
+        Some(inst.hit_in_world(si))
     }
 
     /// Whether an instance blocks `ray` before `t_max`.
@@ -277,7 +279,7 @@ impl Instances {
         self.tlas.occluded(ray, t_max, |k, t_max| {
             let inst = &self.placed[k];
             let group = &self.groups[inst.group as usize].scene;
-            group.occluded(&inst.to_local(ray), t_max)
+            group.occluded(&inst.ray_in_object_space(ray), t_max)
         })
     }
 
@@ -286,7 +288,7 @@ impl Instances {
         self.tlas.occluded_packet(pk, active, |k, lanes| {
             let inst = &self.placed[k];
             let group = &self.groups[inst.group as usize].scene;
-            group.occluded_packet(&inst.to_local_packet(pk), lanes)
+            group.occluded_packet(&inst.packet_in_object_space(pk), lanes)
         })
     }
 
@@ -296,7 +298,7 @@ impl Instances {
         let hits = self.tlas.occluded_packet_avx(pk, active, |k, lanes| {
             let inst = &self.placed[k];
             let group = &self.groups[inst.group as usize].scene;
-            let hit = group.occluded_packet_avx(&inst.to_local_packet(pk), lanes);
+            let hit = group.occluded_packet_avx(&inst.packet_in_object_space(pk), lanes);
             ok &= hit.is_some();
             hit.unwrap_or(0)
         })?;

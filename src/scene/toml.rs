@@ -23,6 +23,8 @@ use std::path::Path;
 use std::sync::Arc;
 use toml::Spanned;
 
+mod instance;
+
 type V3 = [f32; 3];
 
 /// A colour: one number (grey) or three (linear RGB); where a material's main colour is
@@ -68,6 +70,8 @@ struct FileT {
     shape: Vec<Spanned<ShapeT>>,
     #[serde(default)]
     light: Vec<Spanned<LightT>>,
+    #[serde(default)]
+    instance: Vec<Spanned<instance::InstanceT>>,
 }
 
 #[derive(Deserialize)]
@@ -171,6 +175,8 @@ struct ShapeT {
     normals: Option<Spanned<Vec<V3>>>,
     uvs: Option<Spanned<Vec<[f32; 2]>>>,
     smooth: Option<Spanned<bool>>,
+    /// The shape group the shape belongs to, instead of the scene.
+    group: Option<Spanned<String>>,
 }
 
 /// Error helper bound to one file's text.
@@ -834,12 +840,14 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                 return cx.err(e.span(), "an emitting shape must have a positive area");
             }
         }
-        desc.shapes.push(ShapeDesc {
+        let shape = ShapeDesc {
             geometry,
             material,
             emission,
-        });
+        };
+        instance::add_shape(&cx, &mut desc, s.group.as_ref(), shape)?;
     }
+    instance::add_instances(&cx, &mut desc, &file.instance)?;
     for light in &file.light {
         desc.lights.push(light_desc(&cx, light)?);
     }
