@@ -232,8 +232,9 @@ impl Placed {
 
 impl Instances {
     /// The closest hit along `ray`: an instance's nearer than `own` (the scene's own
-    /// primitives' closest, [`Scene::closest`]), else `own`'s.
-    #[inline]
+    /// primitives' closest, [`Scene::closest`]), else `own`'s. (Not inlined, here and
+    /// below: the callers' code stays as small as without instances.)
+    #[inline(never)]
     pub(super) fn intersect(
         &self,
         scene: &Scene,
@@ -274,7 +275,7 @@ impl Instances {
     }
 
     /// Whether an instance blocks `ray` before `t_max`.
-    #[inline]
+    #[inline(never)]
     pub(super) fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
         self.tlas.occluded(ray, t_max, |k, t_max| {
             let inst = &self.placed[k];
@@ -284,6 +285,7 @@ impl Instances {
     }
 
     /// The lanes of `active` that an instance blocks.
+    #[inline(never)]
     pub(super) fn occluded_packet(&self, pk: &ShadowPacket, active: u32) -> u32 {
         self.tlas.occluded_packet(pk, active, |k, lanes| {
             let inst = &self.placed[k];
