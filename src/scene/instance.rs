@@ -364,19 +364,22 @@ impl Instances {
             })
             .collect();
         let more = if built.len() > 4 { ", …" } else { "" };
-        let mb = |b: usize| b as f64 / 1e6;
+        let size = |b: usize| match b {
+            0..1_000_000 => format!("{:.1} kB", b as f64 / 1e3),
+            _ => format!("{:.2} MB", b as f64 / 1e6),
+        };
         format!(
-            "instancing: {} shape group(s) ({}{more}) stored once in {:.2} MB; {} instances, \
+            "instancing: {} shape group(s) ({}{more}) stored once in {}; {} instances, \
              {:.0} bytes each (transforms and top-level BVH); {} primitives rendered; \
-             geometry {:.2} MB in all ({:.2} MB outside instances)",
+             geometry {} in all ({} outside instances)",
             built.len(),
             names.join(", "),
-            mb(self.group_bytes()),
+            size(self.group_bytes()),
             self.placed.len(),
             self.instance_bytes() as f64 / self.placed.len().max(1) as f64,
             self.effective_prims(),
-            mb(own_bytes + self.memory_bytes()),
-            mb(own_bytes),
+            size(own_bytes + self.memory_bytes()),
+            size(own_bytes),
         )
     }
 }
