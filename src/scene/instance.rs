@@ -76,7 +76,7 @@ pub(super) fn build(desc: &mut SceneDesc, times: &mut BuildTimes) -> Option<Box<
     let groups: Vec<Group> = groups
         .into_iter()
         .zip(uses)
-        .map(|(g, uses)| Group::build(g, uses, &desc.materials))
+        .map(|(g, uses)| Group::build(g, uses, &desc.materials, &desc.textures))
         .collect();
     let placed: Vec<Placed> = instances
         .iter()
@@ -114,7 +114,12 @@ pub(super) fn build(desc: &mut SceneDesc, times: &mut BuildTimes) -> Option<Box<
 }
 
 impl Group {
-    fn build(g: GroupDesc, uses: usize, materials: &[crate::material::Material]) -> Group {
+    fn build(
+        g: GroupDesc,
+        uses: usize,
+        materials: &[crate::material::Material],
+        textures: &[crate::texture::Texture],
+    ) -> Group {
         if uses == 0 {
             return Group {
                 name: g.name,
@@ -135,9 +140,20 @@ impl Group {
                 }
             };
         }
+        let materials: Vec<_> = used.iter().map(|&m| materials[m as usize]).collect();
+        // Masks and normal or bump maps read textures during the traversal and at the hit
+        // (bitmaps are shared, not copied).
+        let reads_textures = materials
+            .iter()
+            .any(|m| m.opacity.is_some() || m.normal_map.is_some() || m.bump.is_some());
         let desc = SceneDesc {
-            materials: used.iter().map(|&m| materials[m as usize]).collect(),
+            materials,
             shapes,
+            textures: if reads_textures {
+                textures.to_vec()
+            } else {
+                Vec::new()
+            },
             ..Default::default()
         };
         Group {
@@ -216,15 +232,23 @@ impl Placed {
         let p_err = abs_m * si.p_err * (1.0 + gamma(3))
             + transform_error(m, si.p.abs())
             + abs_m * transform_error(&self.to_object, p.abs() + abs_m * si.p_err);
-        // Normals by the inverse transpose.
+        // Normals by the inverse transpose; the shading normal kept on the geometric
+        // normal's side, unless a normal or bump map tilted it (in object space).
         let n = self.to_object.matrix3.transpose();
         let ng = (n * si.ng).normalize();
-        let ns = (n * si.ns).normalize();
+        let base = (n * si.ns_base).normalize();
+        let base = if base.dot(ng) < 0.0 { -base } else { base };
+        let ns = if si.ns == si.ns_base {
+            base
+        } else {
+            (n * si.ns).normalize()
+        };
         Interaction {
             p,
             p_err,
             ng,
-            ns: if ns.dot(ng) < 0.0 { -ns } else { ns },
+            ns,
+            ns_base: base,
             ..si
         }
     }

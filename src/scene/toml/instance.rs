@@ -3,7 +3,7 @@
 //! group by a transform (docs/scene-format.md, "Instancing").
 
 use super::{list_or_none, span_of, Ctx, V3};
-use crate::scene::desc::{GroupDesc, InstanceDesc, SceneDesc, ShapeDesc};
+use crate::scene::desc::{GroupDesc, InstanceDesc, ShapeDesc};
 use crate::scene::SceneError;
 use glam::{Affine3A, Mat3, Quat, Vec3};
 use serde::Deserialize;
@@ -30,15 +30,17 @@ pub(super) struct InstanceT {
     matrix: Option<Spanned<Vec<[f32; 4]>>>,
 }
 
-/// Adds `shape` to the scene, or to the group `group` names (refusing an emitting one).
+/// Adds `shape` to the scene's `shapes`, or to the group of `groups` that `group` names
+/// (refusing an emitting one).
 pub(super) fn add_shape(
     cx: &Ctx,
-    desc: &mut SceneDesc,
+    shapes: &mut Vec<ShapeDesc>,
+    groups: &mut Vec<GroupDesc>,
     group: Option<&Spanned<String>>,
     shape: ShapeDesc,
 ) -> Result<(), SceneError> {
     let Some(g) = group else {
-        desc.shapes.push(shape);
+        shapes.push(shape);
         return Ok(());
     };
     if shape.emission.is_some() {
@@ -48,9 +50,9 @@ pub(super) fn add_shape(
         );
     }
     let name = g.get_ref();
-    match desc.groups.iter_mut().find(|d| &d.name == name) {
+    match groups.iter_mut().find(|d| &d.name == name) {
         Some(d) => d.shapes.push(shape),
-        None => desc.groups.push(GroupDesc {
+        None => groups.push(GroupDesc {
             name: name.clone(),
             shapes: vec![shape],
         }),
@@ -58,14 +60,13 @@ pub(super) fn add_shape(
     Ok(())
 }
 
-/// Adds the `[[instance]]` tables to the scene.
-pub(super) fn add_instances(
+/// The instances of the `[[instance]]` tables, of `groups`.
+pub(super) fn instances(
     cx: &Ctx,
-    desc: &mut SceneDesc,
+    groups: &[GroupDesc],
     tables: &[Spanned<InstanceT>],
-) -> Result<(), SceneError> {
-    let ids: std::collections::HashMap<&str, u32> = desc
-        .groups
+) -> Result<Vec<InstanceDesc>, SceneError> {
+    let ids: std::collections::HashMap<&str, u32> = groups
         .iter()
         .enumerate()
         .map(|(k, g)| (g.name.as_str(), k as u32))
@@ -91,8 +92,7 @@ pub(super) fn add_instances(
         let to_world = to_world(cx, t)?;
         placed.push(InstanceDesc { group, to_world });
     }
-    desc.instances = placed;
-    Ok(())
+    Ok(placed)
 }
 
 /// The instance's transform: `matrix` (three or four rows of four numbers, the last row
