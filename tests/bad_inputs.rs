@@ -552,3 +552,48 @@ bad_input!(
     toml_unknown_roughness_texture_toml,
     "toml-unknown-roughness-texture.toml"
 );
+bad_input!(
+    xml_instance_projective_to_world_xml,
+    "xml-instance-projective-to-world.xml"
+);
+bad_input!(
+    xml_instance_ref_not_shapegroup_xml,
+    "xml-instance-ref-not-shapegroup.xml"
+);
+bad_input!(
+    xml_instance_ref_to_plain_shape_xml,
+    "xml-instance-ref-to-plain-shape.xml"
+);
+bad_input!(
+    xml_instance_singular_to_world_xml,
+    "xml-instance-singular-to-world.xml"
+);
+bad_input!(
+    xml_instance_two_shapegroups_xml,
+    "xml-instance-two-shapegroups.xml"
+);
+bad_input!(xml_instance_unknown_id_xml, "xml-instance-unknown-id.xml");
+bad_input!(
+    xml_instance_without_shapegroup_xml,
+    "xml-instance-without-shapegroup.xml"
+);
+bad_input!(
+    xml_shapegroup_bsdf_child_xml,
+    "xml-shapegroup-bsdf-child.xml"
+);
+bad_input!(xml_shapegroup_emitter_xml, "xml-shapegroup-emitter.xml");
+bad_input!(xml_shapegroup_nested_xml, "xml-shapegroup-nested.xml");
+bad_input!(
+    xml_shapegroup_with_instance_xml,
+    "xml-shapegroup-with-instance.xml"
+);
+bad_input!(toml_group_emission_toml, "toml-group-emission.toml");
+bad_input!(
+    toml_instance_matrix_and_scale_toml,
+    "toml-instance-matrix-and-scale.toml"
+);
+bad_input!(toml_instance_singular_toml, "toml-instance-singular.toml");
+bad_input!(
+    toml_instance_unknown_group_toml,
+    "toml-instance-unknown-group.toml"
+);

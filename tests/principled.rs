@@ -193,7 +193,11 @@ fn chi2_principled() {
         ("eta 0.8", low_eta.clone(), dir(40.0, 0.2)),
         ("eta 0.8 inside", low_eta.clone(), flip(dir(40.0, 0.2))),
         ("rates", rates.clone(), dir(50.0, 0.4)),
-        ("two-sided from behind", two_sided.clone(), flip(dir(50.0, 0.4))),
+        (
+            "two-sided from behind",
+            two_sided.clone(),
+            flip(dir(50.0, 0.4)),
+        ),
     ];
     chi2_cases(&cases, 100);
 }
@@ -227,7 +231,11 @@ fn chi2_principled_thin() {
         ("thin all from behind", all.clone(), flip(dir(60.0, 0.6))),
         ("thin leaf", leaf.clone(), dir(45.0, 1.1)),
         ("thin glass", glass.clone(), dir(30.0, 2.1)),
-        ("thin glass from behind", glass.clone(), flip(dir(50.0, 2.1))),
+        (
+            "thin glass from behind",
+            glass.clone(),
+            flip(dir(50.0, 2.1)),
+        ),
         ("thin default", thin(T), dir(75.0, 0.0)),
     ];
     chi2_cases(&cases, 200);

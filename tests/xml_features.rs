@@ -121,3 +121,9 @@ fn envmap_emitter_direct_integrator() {
 fn principled_bsdfs() {
     feature_matches_mitsuba("principled", 512, 4096);
 }
+
+/// Shape groups placed by instances under rotations, non-uniform and mirroring scales.
+#[test]
+fn shapegroups_and_instances() {
+    feature_matches_mitsuba("instances", 256, 4096);
+}

@@ -202,7 +202,6 @@ pub fn precomputed_radiance(map: &PhotonMap, sp: &ShadingPoint, r_max: f32) -> O
 /// Bounding-box diagonal of the scene (sets default search radii).
 pub fn scene_diagonal(scene: &Scene) -> f32 {
     scene
-        .bvh
         .bounds()
         .map(|b| b.extent().length())
         .filter(|d| d.is_finite() && *d > 0.0)

@@ -18,6 +18,7 @@ impl Scene {
     /// with a message (the CLI checks before it builds).
     pub fn build(mut desc: SceneDesc) -> Scene {
         let mut times = BuildTimes::start();
+        let instances = super::instance::build(&mut desc, &mut times);
         let masked = desc.materials.iter().any(|m| m.opacity.is_some());
         // Primitives in the description's order: vertex indices (or a sphere), material and
         // flags, and bounds.
@@ -207,9 +208,9 @@ impl Scene {
             PrimRef::new(&bounds_of(idx), i, idx[0] == SPHERE)
         };
         let (wide, order) = bvh::build(tris.len(), prim, &mut times);
-        let radius = wide
-            .bounds()
-            .map_or(1.0, |world| 0.5 * (world.max - world.min).length());
+        let bounds =
+            super::instance::union(wide.bounds(), instances.as_ref().and_then(|i| i.bounds()));
+        let radius = bounds.map_or(1.0, |world| 0.5 * (world.max - world.min).length());
         let others = desc
             .lights
             .iter()
@@ -305,6 +306,7 @@ impl Scene {
             textures: desc.textures,
             cameras: desc.cameras,
             desc_settings: desc.settings,
+            instances,
             masked,
         }
     }

@@ -8,6 +8,7 @@ pub mod build;
 pub mod cylinder;
 pub mod desc;
 pub mod error;
+pub mod instance;
 pub mod mask;
 pub mod obj;
 mod perturb;
@@ -17,7 +18,7 @@ pub mod text;
 pub mod toml;
 pub mod xml;
 
-pub use desc::{GeometryDesc, SceneDesc, ShapeDesc};
+pub use desc::{GeometryDesc, GroupDesc, InstanceDesc, SceneDesc, ShapeDesc};
 pub use error::SceneError;
 
 use crate::accel::{ShadowPacket, WideBvh, PACKET};
@@ -159,6 +160,8 @@ pub struct Scene {
     pub(crate) masked: bool,
     /// How long each phase of `Scene::build` took.
     pub build_times: crate::accel::BuildTimes,
+    /// Shape groups, each stored once, and their instances (None without any).
+    pub(crate) instances: Option<Box<instance::Instances>>,
 }
 
 impl Scene {
@@ -216,29 +219,43 @@ impl Scene {
     /// Closest hit along the ray, if any.
     #[inline(always)]
     pub fn intersect(&self, ray: &Ray) -> Option<Interaction> {
+        let hit = self.closest(ray, f32::INFINITY);
+        if let Some(inst) = &self.instances {
+            return inst.intersect(self, ray, hit);
+        }
+        let (i, u, v, t) = hit?;
+        Some(self.interaction(ray, i, u, v, t))
+    }
+
+    /// The closest of this scene's own primitives (not its instances) hit before `t_max`
+    /// (or at it), and seen (through masks): (primitive, u, v, t).
+    #[inline(always)]
+    fn closest(&self, ray: &Ray, t_max: f32) -> Option<(usize, f32, f32, f32)> {
         if self.masked {
-            return self.closest(ray, |i, u, v, t| self.seen(ray, i, u, v, t));
+            return self.closest_kept(ray, t_max, |i, u, v, t| self.seen(ray, i, u, v, t));
         }
         #[cfg(target_arch = "x86_64")]
         if let Some(f) = &self.flat {
             let (i, t, u, v) = f.intersect(
                 ray,
-                f32::INFINITY,
+                t_max,
                 #[inline(always)]
                 |i, t_max| self.hit(ray, i, t_max),
             )?;
-            return Some(self.interaction(ray, i, u, v, t));
+            return Some((i, u, v, t));
         }
-        self.closest(ray, |_, _, _, _| true)
+        self.closest_kept(ray, t_max, |_, _, _, _| true)
     }
 
-    /// The closest hit through the BVH of those `keep` keeps (given the primitive, u, v, t).
+    /// [`Scene::closest`] through the BVH, of the hits `keep` keeps (given the primitive,
+    /// u, v, t).
     #[inline(always)]
-    fn closest(
+    fn closest_kept(
         &self,
         ray: &Ray,
+        t_max: f32,
         keep: impl Fn(usize, f32, f32, f32) -> bool,
-    ) -> Option<Interaction> {
+    ) -> Option<(usize, f32, f32, f32)> {
         // Of equally near hits the lowest primitive, whatever the order the traversal
         // visits them in (as `accel::flat` finds them): a primitive is tested without a
         // bound (its tests read `t_max` only to accept their answer), and its hit kept if
@@ -246,7 +263,7 @@ impl Scene {
         let mut best = (usize::MAX, 0.0f32, 0.0f32, 0.0f32);
         let found = self.bvh.intersect(
             ray,
-            f32::INFINITY,
+            t_max,
             #[inline(always)]
             |i, t_max| {
                 let (t, u, v) = self.hit(ray, i, f32::INFINITY)?;
@@ -256,11 +273,7 @@ impl Scene {
                 })
             },
         );
-        if !found {
-            return None;
-        }
-        let (i, u, v, t) = best;
-        Some(self.interaction(ray, i, u, v, t))
+        found.then_some(best)
     }
 
     #[inline(always)]
@@ -366,6 +379,13 @@ impl Scene {
     /// True if anything blocks the ray before parametric distance `t_max`.
     #[inline(always)]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        self.occluded_prims(ray, t_max)
+            || (self.instances.as_ref()).is_some_and(|inst| inst.occluded(ray, t_max))
+    }
+
+    /// [`Scene::occluded`] by this scene's own primitives (not its instances).
+    #[inline(always)]
+    fn occluded_prims(&self, ray: &Ray, t_max: f32) -> bool {
         if self.masked {
             return self.bvh.occluded(ray, t_max, |i, t_max| {
                 self.hit(ray, i, t_max)
@@ -393,16 +413,28 @@ impl Scene {
     /// [`Scene::occluded`] for each, in one traversal.
     #[inline]
     pub fn occluded_packet(&self, pk: &ShadowPacket, active: u32) -> u32 {
-        self.bvh
-            .occluded_packet(pk, active, |i, lanes| self.packet_hits(pk, i, lanes))
+        let hits = self
+            .bvh
+            .occluded_packet(pk, active, |i, lanes| self.packet_hits(pk, i, lanes));
+        match &self.instances {
+            Some(inst) if hits != active => hits | inst.occluded_packet(pk, active & !hits),
+            _ => hits,
+        }
     }
 
     /// [`Scene::occluded_packet`] without AVX-512, where the CPU has AVX (`None` where it
     /// has not), for the tests to compare both packet traversals with single rays.
     #[doc(hidden)]
     pub fn occluded_packet_avx(&self, pk: &ShadowPacket, active: u32) -> Option<u32> {
-        self.bvh
-            .occluded_packet_avx(pk, active, |i, lanes| self.packet_hits(pk, i, lanes))
+        let hits = self
+            .bvh
+            .occluded_packet_avx(pk, active, |i, lanes| self.packet_hits(pk, i, lanes))?;
+        match &self.instances {
+            Some(inst) if hits != active => {
+                Some(hits | inst.occluded_packet_avx(pk, active & !hits)?)
+            }
+            _ => Some(hits),
+        }
     }
 
     /// The lanes of `lanes` whose rays primitive `i` blocks.
@@ -469,8 +501,14 @@ impl Scene {
 
     /// Bytes held by the geometry the integrators trace: per-primitive indices and
     /// materials, vertex positions, normals and texture coordinates, spheres, the emitter
-    /// table and BVH nodes (not materials, textures or lights).
+    /// table and BVH nodes (not materials, textures or lights); with instances, each
+    /// group's once and the instances' own ([`instance::Instances::memory_bytes`]).
     pub fn memory_bytes(&self) -> usize {
+        self.own_memory_bytes() + self.instances.as_ref().map_or(0, |i| i.memory_bytes())
+    }
+
+    /// [`Scene::memory_bytes`] of this scene's own primitives (not its instances).
+    fn own_memory_bytes(&self) -> usize {
         use std::mem::size_of_val;
         size_of_val(&self.tris[..])
             + size_of_val(&self.meta[..])
@@ -559,13 +597,31 @@ impl Scene {
         }
     }
 
-    /// Primitives: triangles and spheres.
+    /// Primitives stored: triangles and spheres, each group's once (however many
+    /// instances place it).
     pub fn prim_count(&self) -> usize {
-        self.tris.len()
+        self.tris.len() + self.instances.as_ref().map_or(0, |i| i.stored_prims())
     }
 
+    /// Triangles stored, each group's once.
     pub fn triangle_count(&self) -> usize {
         self.tris.len() - self.spheres.len()
+            + self.instances.as_ref().map_or(0, |i| i.stored_triangles())
+    }
+
+    /// The bounds of everything the scene holds, instances included (None if empty).
+    pub fn bounds(&self) -> Option<crate::geometry::Aabb> {
+        instance::union(
+            self.bvh.bounds(),
+            self.instances.as_ref().and_then(|i| i.bounds()),
+        )
+    }
+
+    /// A line on the scene's instancing for the render summary (None without instances).
+    pub fn instancing_summary(&self) -> Option<String> {
+        self.instances
+            .as_ref()
+            .map(|i| i.summary(self.own_memory_bytes()))
     }
 }
 

@@ -25,6 +25,8 @@ use std::path::Path;
 use std::sync::Arc;
 use toml::Spanned;
 
+mod instance;
+
 type V3 = [f32; 3];
 
 #[path = "toml_principled.rs"]
@@ -81,6 +83,8 @@ struct FileT {
     shape: Vec<Spanned<ShapeT>>,
     #[serde(default)]
     light: Vec<Spanned<LightT>>,
+    #[serde(default)]
+    instance: Vec<Spanned<instance::InstanceT>>,
 }
 
 #[derive(Deserialize)]
@@ -211,6 +215,8 @@ struct ShapeT {
     normals: Option<Spanned<Vec<V3>>>,
     uvs: Option<Spanned<Vec<[f32; 2]>>>,
     smooth: Option<Spanned<bool>>,
+    /// The shape group the shape belongs to, instead of the scene.
+    group: Option<Spanned<String>>,
 }
 
 /// Error helper bound to one file's text.
@@ -998,12 +1004,20 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                 return cx.err(e.span(), "an emitting shape must have a positive area");
             }
         }
-        desc.shapes.push(ShapeDesc {
+        let shape = ShapeDesc {
             geometry,
             material,
             emission,
-        });
+        };
+        instance::add_shape(
+            &cx,
+            &mut desc.shapes,
+            &mut desc.groups,
+            s.group.as_ref(),
+            shape,
+        )?;
     }
+    desc.instances = instance::instances(&cx, &desc.groups, &file.instance)?;
     for light in &file.light {
         desc.lights.push(light_desc(&cx, light, &tex, base)?);
     }

@@ -196,7 +196,12 @@ impl<'a> Wavefront<'a> {
             return None;
         }
         let n = scene.tris.len();
-        if n == 0 || n > MAX_PRIMS || !scene.is_flat() || !scene.attrs.is_empty() {
+        if n == 0
+            || n > MAX_PRIMS
+            || !scene.is_flat()
+            || !scene.attrs.is_empty()
+            || scene.instances.is_some()
+        {
             return None;
         }
         let planar = scene.lights.single_planar()?;

@@ -38,7 +38,12 @@ pub(super) struct Builder<'a> {
     default_material: Option<u32>,
     /// The BSDF elements being converted, outermost first (a `<ref>` cycle is an error).
     converting: Vec<*const Elem>,
+    /// Index in `desc.groups` of each shape group element already built.
+    groups: HashMap<*const Elem, u32>,
 }
+
+#[path = "instance.rs"]
+mod instance;
 
 pub fn build(doc: &Document, lenient: bool) -> Result<SceneDesc> {
     let mut b = Builder {
@@ -50,6 +55,7 @@ pub fn build(doc: &Document, lenient: bool) -> Result<SceneDesc> {
         textures: HashMap::new(),
         default_material: None,
         converting: Vec::new(),
+        groups: HashMap::new(),
     };
     let scene = Props::new(doc, &b.ids, &doc.root)?;
     let mut sensors = 0;
@@ -562,6 +568,9 @@ impl<'a> Builder<'a> {
     fn shape(&mut self, e: &'a Elem) -> Result<()> {
         let p = self.props(e)?;
         let kind = p.kind()?;
+        if let Some(done) = self.instancing(e, &p, kind) {
+            return done;
+        }
         let m = p.transform("to_world")?;
         let flip = p.bool("flip_normals", false)?;
         let geometry = match kind {
@@ -692,7 +701,7 @@ impl<'a> Builder<'a> {
                     "type",
                     format!(
                         "shape '{kind}' is not supported; mcrt has obj, ply, serialized, \
-                         rectangle, cube, sphere, disk and cylinder"
+                         rectangle, cube, sphere, disk, cylinder, shapegroup and instance"
                     ),
                 ))
             }
