@@ -179,10 +179,10 @@ fn unknown_texture() {
 #[test]
 fn texture_name_where_a_colour_is_needed() {
     bad_scene(
-        "texture-emission",
-        "[texture.checks]\ntype = \"checkerboard\"\n\n[[shape]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nemission = \"checks\"\n",
-        loc("emission = \"checks\"", "\"checks\""),
-        &["'emission' must be a colour", "not a texture"],
+        "texture-intensity",
+        "[texture.checks]\ntype = \"checkerboard\"\n\n[[light]]\ntype = \"point\"\nposition = [0, 0, 0]\nintensity = \"checks\"\n",
+        loc("intensity = \"checks\"", "\"checks\""),
+        &["'intensity' must be a colour", "not a texture"],
     );
 }
 

@@ -127,3 +127,11 @@ fn principled_bsdfs() {
 fn shapegroups_and_instances() {
     feature_matches_mitsuba("instances", 256, 4096);
 }
+
+/// The principled BSDFs' float parameters bound to textures (bitmap luminance and
+/// checkerboard `eval_1`): roughness, metallic, clearcoat, sheen, spec_trans, anisotropic,
+/// spec_tint, flatness, sheen_tint and principledthin's diff_trans.
+#[test]
+fn principled_float_parameters_take_textures() {
+    feature_matches_mitsuba("principled-textured", 512, 4096);
+}
