@@ -7,6 +7,7 @@
 pub mod build;
 pub mod desc;
 pub mod error;
+pub mod gltf;
 pub mod obj;
 pub mod ply;
 pub mod text;
