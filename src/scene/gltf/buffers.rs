@@ -212,7 +212,7 @@ mod tests {
             .unwrap_err()
             .contains("truncated"));
         let mut long = glb.clone();
-        long[16..20].copy_from_slice(&8u32.to_le_bytes());
+        long[12..16].copy_from_slice(&8u32.to_le_bytes());
         assert!(check_glb_header(&long)
             .unwrap_err()
             .contains("past the end"));

@@ -73,17 +73,55 @@ pub fn bsdf_for(p: &Pbr) -> Bsdf {
         };
     }
     let specular = p.specular.min(Color::ONE);
-    if smooth {
-        Bsdf::Plastic(Plastic::new(eta, p.base, specular, false))
+    plastic(
+        eta,
+        p.roughness,
+        p.base * diffuse_scale(eta, p.roughness),
+        specular,
+    )
+}
+
+/// Mitsuba's `plastic` (roughness 0) or `roughplastic` (GGX, α = roughness²), linear.
+fn plastic(eta: f32, roughness: f32, diffuse: Color, specular: Color) -> Bsdf {
+    if roughness == 0.0 {
+        Bsdf::Plastic(Plastic::new(eta, diffuse, specular, false))
     } else {
+        let alpha = roughness * roughness;
         Bsdf::RoughPlastic(RoughPlastic::new(
             MicrofacetType::Ggx,
             alpha,
             eta,
-            p.base,
+            diffuse,
             specular,
             false,
         ))
+    }
+}
+
+/// What the base colour of a plastic is multiplied by so that its diffuse albedo at normal
+/// incidence is glTF's, (1 − F0)·baseColor with F0 = ((η − 1)/(η + 1))² (Appendix B's
+/// `fresnel_mix`). Mitsuba's plastics see the base through the coating twice and lose more
+/// (for η = 1.5 their diffuse albedo is about 0.6 × the base colour); the albedo per unit of
+/// base colour is integrated from the BSDF's own `eval` (midpoint rule in cos θi, on which
+/// the diffuse part alone depends).
+pub fn diffuse_scale(eta: f32, roughness: f32) -> f32 {
+    const N: usize = 256;
+    let m = Material::new(plastic(eta, roughness, Color::ONE, Color::ZERO), false);
+    let wo = glam::Vec3A::Z;
+    let albedo: f32 = (0..N)
+        .map(|i| {
+            let mu = (i as f32 + 0.5) / N as f32;
+            let wi = glam::Vec3A::new((1.0 - mu * mu).sqrt(), 0.0, mu);
+            m.eval(wo, wi).x * mu
+        })
+        .sum::<f32>()
+        * std::f32::consts::TAU
+        / N as f32;
+    let f0 = ((eta - 1.0) / (eta + 1.0)).powi(2);
+    if albedo > 0.0 {
+        (1.0 - f0) / albedo
+    } else {
+        1.0
     }
 }
 
@@ -103,8 +141,11 @@ impl Loader<'_> {
         let mut mat = Material::new(bsdf_for(&pbr), m.double_sided());
         if let Some(info) = base_tex {
             if mat.takes_texture() {
-                let factor =
+                let mut factor =
                     Color::from_slice(&m.pbr_metallic_roughness().base_color_factor()[..3]);
+                if matches!(mat.bsdf, Bsdf::Plastic(_) | Bsdf::RoughPlastic(_)) {
+                    factor *= diffuse_scale(pbr.ior.max(1.0 + 1e-3), pbr.roughness);
+                }
                 mat.texture =
                     self.texture(&info, false, factor, &format!("{what}.baseColorTexture"))?;
             } else {
@@ -450,5 +491,51 @@ mod tests {
         // α = roughness².
         let m = bsdf_for(&p(1.0, 0.0, 0.5)).microfacet().unwrap();
         assert_eq!((m.alpha_u, m.alpha_v), (0.25, 0.25));
+    }
+
+    /// The plastic's diffuse albedo at normal incidence is glTF's (1 − F0)·baseColor, smooth
+    /// or rough: estimated by sampling the BSDF (independently of `diffuse_scale`'s
+    /// quadrature), counting the diffuse part of each sample's value.
+    #[test]
+    fn plastic_diffuse_albedo_is_gltfs() {
+        for roughness in [0.0, 0.3, 0.8] {
+            let pbr = Pbr {
+                base: Color::splat(0.5),
+                metallic: 0.0,
+                roughness,
+                ..Pbr::default()
+            };
+            let m = Material::new(bsdf_for(&pbr), false);
+            let diffuse_only = Material::new(
+                plastic(
+                    1.5,
+                    roughness,
+                    Color::splat(0.5 * diffuse_scale(1.5, roughness)),
+                    Color::ZERO,
+                ),
+                false,
+            );
+            let wo = glam::Vec3A::Z;
+            let n = 100_000;
+            let mut rng = crate::sampler::Pcg32::new(7, 1);
+            let mut sum = 0.0f64;
+            for _ in 0..n {
+                let u1 = rng.next_1d();
+                let u2 = glam::Vec2::new(rng.next_1d(), rng.next_1d());
+                let Some(s) = m.sample(wo, u1, u2, crate::material::TransportMode::Radiance) else {
+                    continue;
+                };
+                let pdf = m.pdf(wo, s.wi);
+                if !s.specular && pdf > 0.0 {
+                    sum += (diffuse_only.eval(wo, s.wi).x * s.wi.z / pdf) as f64;
+                }
+            }
+            let albedo = sum / n as f64;
+            let want = 0.5 * (1.0 - 0.04);
+            assert!(
+                (albedo - want).abs() < 0.01,
+                "roughness {roughness}: {albedo} vs {want}"
+            );
+        }
     }
 }

@@ -11,8 +11,8 @@ Outputs, in this directory:
   twin-principled.xml                    the twin with Mitsuba's `principled` BSDF
 
 The scene: a node hierarchy (a rig carrying the camera, a group with a scale carrying two
-instances of one metal cube, a glass box placed by a `matrix`), a textured rough floor with
-KHR_texture_transform, a red back wall, an emissive panel (KHR_materials_emissive_strength)
+instances of one metal cube, a glass box placed by a `matrix`), a textured rough metal floor
+with KHR_texture_transform, a red back wall, an emissive panel (KHR_materials_emissive_strength)
 and a point light (KHR_lights_punctual, candela). The twin places the same meshes with the
 world matrices computed here from the glTF specification's rules (T*R*S, parent*child,
 camera looking down -z), independently of mcrt's loader.
@@ -109,7 +109,7 @@ MESHES = {  # name: (geometry, material, with normals, with uvs, indexed)
 TT = {"offset": [0.1, 0.2], "rotation": 0.3, "scale": [2.0, 3.0]}
 MATERIALS = [
     {"name": "floor", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "extensions": {"KHR_texture_transform": TT}},
-                                               "metallicFactor": 0.0, "roughnessFactor": 0.6}},
+                                               "metallicFactor": 1.0, "roughnessFactor": 0.6}},
     {"name": "wall", "pbrMetallicRoughness": {"baseColorFactor": [0.7, 0.15, 0.1, 1.0], "metallicFactor": 0.0,
                                               "roughnessFactor": 0.4}},
     {"name": "gold", "pbrMetallicRoughness": {"baseColorFactor": [0.95, 0.7, 0.3, 1.0], "metallicFactor": 1.0,
@@ -241,6 +241,12 @@ def tex_matrix():
     return [[c*sx, -s*sy, ox], [s*sx, c*sy, oy], [0, 0, 1]]
 
 
+# What mcrt multiplies a plastic's base colour by, so that its diffuse albedo at normal
+# incidence is glTF's (1 - F0) * baseColor (scene::gltf::materials::diffuse_scale): here for
+# ior 1.5 and roughness 0.4, the wall's, integrated from Mitsuba 3's roughplastic.
+PLASTIC_SCALE = {(1.5, 0.4): 1.19731}
+
+
 def bsdf_xml(m, principled):
     pbr = m["pbrMetallicRoughness"]; r = pbr.get("roughnessFactor", 1.0); a = r * r
     metal = pbr.get("metallicFactor", 1.0); base = pbr.get("baseColorFactor", [1, 1, 1, 1])[:3]
@@ -265,8 +271,10 @@ def bsdf_xml(m, principled):
     if trans >= 0.5:
         return ('<bsdf type="roughdielectric"><string name="distribution" value="ggx"/><float name="alpha" '
                 'value="%.9g"/><float name="int_ior" value="%g"/><float name="ext_ior" value="1"/></bsdf>' % (a, ior))
+    k = PLASTIC_SCALE[(ior, r)] if any(base) else 1.0
     return ('<bsdf type="roughplastic"><string name="distribution" value="ggx"/><float name="alpha" value="%.9g"/>'
-            '<float name="int_ior" value="%g"/><float name="ext_ior" value="1"/>%s</bsdf>' % (a, ior, colour("diffuse_reflectance")))
+            '<float name="int_ior" value="%g"/><float name="ext_ior" value="1"/>%s</bsdf>'
+            % (a, ior, rgb("diffuse_reflectance", [c * k for c in base])))
 
 
 def write_twin(principled):
