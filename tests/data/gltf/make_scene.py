@@ -235,10 +235,12 @@ def write_ply(name, pos, nor, uv, idx, with_n, with_uv):
 
 
 def tex_matrix():
-    """KHR_texture_transform: T * R * S with R = GLSL mat3(cos, sin, 0, -sin, cos, 0, 0, 0, 1)."""
+    """KHR_texture_transform: T * R * S with R = GLSL mat3(cos, sin, 0, -sin, cos, 0, 0, 0, 1),
+    as the 4x4 matrix Mitsuba's `to_uv` takes (it keeps the upper-left 2x2 block and the x, y
+    of column 3: a 3x3 matrix would lose the offset)."""
     c, s = math.cos(TT["rotation"]), math.sin(TT["rotation"])
     sx, sy = TT["scale"]; ox, oy = TT["offset"]
-    return [[c*sx, -s*sy, ox], [s*sx, c*sy, oy], [0, 0, 1]]
+    return [[c*sx, -s*sy, 0, ox], [s*sx, c*sy, 0, oy], [0, 0, 1, 0], [0, 0, 0, 1]]
 
 
 # What mcrt multiplies a plastic's base colour by, so that its diffuse albedo at normal
