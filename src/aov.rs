@@ -145,7 +145,7 @@ pub fn render_guides(scene: &Scene, s: &RenderSettings) -> Result<Guides, Render
                         for i in 0..GUIDE_SPP {
                             let mut sampler =
                                 Sampler::for_sample(s.sampler, s.seed, pixel, i as u64);
-                            let mut ray = camera.generate_ray(gx, gy, sampler.next_2d());
+                            let mut ray = camera.sample_ray(gx, gy, &mut sampler);
                             let le = if sees_emitters {
                                 seen_emission(scene, &ray)
                             } else {
@@ -220,7 +220,10 @@ fn seen_emission(scene: &Scene, ray: &crate::geometry::Ray) -> Color {
     match scene.intersect(ray) {
         Some(si) if si.light != crate::scene::NO_LIGHT => scene.lights.le(si.light, si.ng, -ray.d),
         Some(_) => Color::ZERO,
-        None => scene.lights.environment().map_or(Color::ZERO, |(le, _)| le),
+        None => scene
+            .lights
+            .environment(ray.d)
+            .map_or(Color::ZERO, |(le, _)| le),
     }
 }
 
@@ -280,7 +283,7 @@ pub fn emission_split(
                 let mut own = glam::DVec3::ZERO;
                 for k in 0..n {
                     let mut sampler = Sampler::for_sample(s.sampler, s.seed, pixel, k as u64);
-                    let ray = camera.generate_ray(gx, gy, sampler.next_2d());
+                    let ray = camera.sample_ray(gx, gy, &mut sampler);
                     own += seen_emission(scene, &ray).as_dvec3();
                 }
                 let m = EMISSION_POINTS;

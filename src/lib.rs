@@ -27,6 +27,7 @@ pub mod photon;
 pub mod preview;
 pub mod progressive;
 pub mod render;
+pub mod rgbe;
 pub mod sampler;
 pub mod scene;
 pub mod session;

@@ -204,7 +204,7 @@ fn render_tile(
         let pixel = p.gy as u64 * s.width as u64 + p.gx as u64;
         for i in p.samples.0..p.samples.1 {
             let mut sampler = Sampler::for_sample(s.sampler, s.seed, pixel, i as u64);
-            let ray = camera.generate_ray(p.gx, p.gy, sampler.next_2d());
+            let ray = camera.sample_ray(p.gx, p.gy, &mut sampler);
             let l = integrator.li(ray, &mut sampler, &mut stats.rays);
             if l.is_finite() {
                 px.add(l);

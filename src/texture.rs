@@ -124,7 +124,7 @@ impl WrapMode {
 
     /// Wraps an integer pixel index into `[0, n)` (n ≥ 1).
     #[inline]
-    fn wrap(self, i: i64, n: i64) -> usize {
+    pub(crate) fn wrap(self, i: i64, n: i64) -> usize {
         (match self {
             WrapMode::Clamp => i.clamp(0, n - 1),
             WrapMode::Repeat => i.rem_euclid(n),
@@ -217,9 +217,9 @@ impl Bitmap {
         })
     }
 
-    /// Reads a PNG (8 or 16 bits; gray, gray+alpha, RGB, RGBA or palette) or OpenEXR file,
-    /// recognized by its first bytes. Unless `raw`, PNG values are sRGB-decoded to linear;
-    /// EXR values are linear and kept as they are. The file is read once
+    /// Reads a PNG (8 or 16 bits; gray, gray+alpha, RGB, RGBA or palette), OpenEXR or
+    /// Radiance HDR ([`crate::rgbe`]) file, recognized by its first bytes. Unless `raw`, PNG
+    /// values are sRGB-decoded to linear; EXR and HDR values are linear and kept as they are. The file is read once
     /// ([`crate::input::read`]).
     pub fn load(path: &Path, raw: bool) -> Result<Bitmap, SceneError> {
         let err = |msg: String| SceneError::new(path, None, msg);
@@ -237,10 +237,14 @@ impl Bitmap {
             let img = crate::image::decode_exr(bytes)
                 .map_err(|e| format!("cannot read OpenEXR texture: {e}"))?;
             Bitmap::from_pixels(img.width, img.height, img.pixels)
+        } else if crate::rgbe::is_rgbe(bytes) {
+            let (w, h, pixels) = crate::rgbe::decode(bytes)
+                .map_err(|e| format!("cannot read Radiance HDR image: {e}"))?;
+            Bitmap::from_pixels(w, h, pixels)
         } else if bytes.len() < 8 {
-            Err("not a PNG or OpenEXR image (file too short)".into())
+            Err("not a PNG, OpenEXR or Radiance HDR image (file too short)".into())
         } else {
-            Err("unsupported texture format (expected a PNG or OpenEXR image)".into())
+            Err("unsupported image format (expected PNG, OpenEXR or Radiance HDR)".into())
         }
     }
 
@@ -888,7 +892,7 @@ mod tests {
         std::fs::write(&p, "hello, not an image").unwrap();
         let e = Bitmap::load(&p, false).unwrap_err().to_string();
         assert!(
-            e.contains("text.png") && e.contains("unsupported texture format"),
+            e.contains("text.png") && e.contains("unsupported image format"),
             "{e}"
         );
         let p = temp_file("tiny.png");

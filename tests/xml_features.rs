@@ -36,3 +36,29 @@ fn textures_meshes_and_includes() {
 fn beckmann_rough_bsdfs_by_default() {
     feature_matches_mitsuba("beckmann", 512, 4096);
 }
+
+/// `spot`: default and given beam widths (linear falloff between beam and cutoff), a
+/// projected PNG texture, frames by lookat and by rotations.
+#[test]
+fn spot_emitters() {
+    feature_matches_mitsuba("spot", 256, 4096);
+}
+
+/// `normalmap` on a rectangle, `bumpmap` on a sphere, and a `mask` with a bitmap opacity in
+/// front of an area light (shadow rays through it).
+#[test]
+fn normal_bump_maps_and_masks() {
+    feature_matches_mitsuba("maps-mask", 512, 4096);
+}
+
+/// A thinlens sensor: defocus in front of and behind the plane of focus.
+#[test]
+fn thinlens_sensor_defocus() {
+    feature_matches_mitsuba("cameras", 256, 4096);
+}
+
+/// An orthographic sensor whose to_world scale sets the view's extent.
+#[test]
+fn orthographic_sensor() {
+    feature_matches_mitsuba("orthographic", 256, 4096);
+}

@@ -45,7 +45,7 @@ pub fn li(
         let hidden = depth == 0 && p.hide_emitters;
         let Some(si) = scene.intersect(&ray) else {
             if !hidden {
-                l += beta * escaped(scene, None, p.shadow_rays);
+                l += beta * escaped(scene, ray.d, None, p.shadow_rays);
             }
             break;
         };
@@ -96,7 +96,7 @@ pub fn li(
                 Some(si2) => {
                     l += beta * bs.weight * emitted(scene, &si2, ray2.d, prev, p.shadow_rays)
                 }
-                None => l += beta * bs.weight * escaped(scene, prev, p.shadow_rays),
+                None => l += beta * bs.weight * escaped(scene, ray2.d, prev, p.shadow_rays),
             }
         }
         break;

@@ -338,11 +338,16 @@ pub fn li_portable(
     }
 }
 
-/// Radiance of the environment along a ray `d` that left the scene, weighted against light
-/// sampling as `emitted` is.
+/// Radiance of the environment along a ray `d` (unit) that left the scene, weighted against
+/// light sampling as `emitted` is.
 #[inline]
-pub(crate) fn escaped(scene: &Scene, prev: Option<(Vec3A, f32)>, shadow_rays: u32) -> Color {
-    let Some((le, light_pdf)) = scene.lights.environment() else {
+pub(crate) fn escaped(
+    scene: &Scene,
+    d: Vec3A,
+    prev: Option<(Vec3A, f32)>,
+    shadow_rays: u32,
+) -> Color {
+    let Some((le, light_pdf)) = scene.lights.environment(d) else {
         return Color::ZERO;
     };
     match prev {

@@ -60,7 +60,7 @@ impl super::Integrator for PathTracer<'_> {
         stats: &mut RenderStats,
     ) -> bool {
         #[cfg(target_arch = "x86_64")]
-        if let Some(w) = &self.wavefront {
+        if let Some(w) = self.wavefront.as_ref().filter(|_| camera.is_pinhole()) {
             w.render_tile(camera, pixels, sums, stats);
             return true;
         }
@@ -93,7 +93,7 @@ pub fn li(
         let hidden = depth == 0 && p.hide_emitters;
         let Some(si) = scene.intersect(&ray) else {
             if !hidden {
-                l += beta * escaped(scene, prev, p.shadow_rays);
+                l += beta * escaped(scene, ray.d, prev, p.shadow_rays);
             }
             break;
         };

@@ -209,7 +209,7 @@ pub fn li(
     });
     let Some((si, material, ray, beta, s)) = hit else {
         if first && !hidden_first {
-            l += super::escaped(scene, None, p.shadow_rays);
+            l += super::escaped(scene, ray.d, None, p.shadow_rays);
         }
         return l;
     };

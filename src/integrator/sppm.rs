@@ -113,7 +113,7 @@ pub fn render_sppm_until(
                         let (gx, gy) = (x as u32 + ox, y as u32 + oy);
                         let pixel = gy as u64 * s.width as u64 + gx as u64;
                         let mut sampler = Sampler::for_sample(s.sampler, s.seed, pixel, it as u64);
-                        let ray = camera.generate_ray(gx, gy, sampler.next_2d());
+                        let ray = camera.sample_ray(gx, gy, &mut sampler);
                         let (ld, vp) = camera_path(scene, ray, &mut sampler, s, max_depth, &mut st);
                         px.ld_it = if ld.is_finite() { ld } else { Color::ZERO };
                         px.vp = vp;
@@ -243,7 +243,7 @@ fn camera_path(
         segs += 1;
         let Some(si) = scene.intersect(&ray) else {
             if !(segs == 1 && p.hide_emitters) {
-                l += beta * super::escaped(scene, None, p.shadow_rays);
+                l += beta * super::escaped(scene, ray.d, None, p.shadow_rays);
             }
             return (l, None);
         };

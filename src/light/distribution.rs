@@ -1,4 +1,6 @@
-//! Piecewise-constant discrete distributions (for picking lights by power).
+//! Piecewise-constant distributions: discrete ones (for picking lights by power) and their
+//! continuous forms on [0, 1) and [0, 1)² (for sampling an environment map's pixels; pbrt-v4
+//! §A.1 and `PiecewiseConstant2D`: a marginal over rows, a conditional over each row).
 
 #[derive(Clone, Debug, Default)]
 pub struct Distribution1D {
@@ -58,5 +60,148 @@ impl Distribution1D {
             i += 1;
         }
         Some((i, self.pmf[i]))
+    }
+
+    /// A point x in [0, 1) with density `pmf[i] · n` on bin i = ⌊x·n⌋ (the bin's share of
+    /// the unit interval); None when the distribution is empty.
+    #[inline]
+    pub fn sample_continuous(&self, u: f32) -> Option<(f32, f32)> {
+        let (i, p) = self.sample_discrete(u)?;
+        let n = self.pmf.len() as f32;
+        // Where u falls within the bin's share of the cdf, remapped to [0, 1).
+        let du = if p > 0.0 {
+            ((u - self.cdf[i]) / p).clamp(0.0, 1.0)
+        } else {
+            0.5
+        };
+        let x = ((i as f32 + du) / n).min(ONE_MINUS_EPSILON);
+        Some((x, p * n))
+    }
+
+    /// The density of `sample_continuous` at x in [0, 1].
+    #[inline]
+    pub fn pdf_continuous(&self, x: f32) -> f32 {
+        let n = self.pmf.len();
+        if n == 0 || !(0.0..=1.0).contains(&x) {
+            return 0.0;
+        }
+        let i = ((x * n as f32) as usize).min(n - 1);
+        self.pmf[i] * n as f32
+    }
+}
+
+/// The largest f32 below 1.
+const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+
+/// A piecewise-constant density on [0, 1)², constant on each of `nu × nv` cells.
+#[derive(Clone, Debug, Default)]
+pub struct Distribution2D {
+    /// Over u within each row (v).
+    conditional: Vec<Distribution1D>,
+    /// Over rows, by each row's total weight.
+    marginal: Distribution1D,
+}
+
+impl Distribution2D {
+    /// `weights[v · nu + u]`: finite and non-negative. All-zero weights give an empty
+    /// distribution, which samples nothing and has density 0 everywhere.
+    pub fn new(weights: &[f32], nu: usize, nv: usize) -> Self {
+        assert_eq!(weights.len(), nu * nv, "weights of a {nu}×{nv} grid");
+        let conditional: Vec<Distribution1D> = weights
+            .chunks_exact(nu.max(1))
+            .map(Distribution1D::new)
+            .collect();
+        let rows: Vec<f32> = weights
+            .chunks_exact(nu.max(1))
+            .map(|r| r.iter().map(|&w| w.max(0.0) as f64).sum::<f64>() as f32)
+            .collect();
+        Distribution2D {
+            conditional,
+            marginal: Distribution1D::new(&rows),
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.marginal.is_empty()
+    }
+
+    /// A point of [0, 1)² and its density; None when the distribution is empty.
+    #[inline]
+    pub fn sample(&self, u: glam::Vec2) -> Option<(glam::Vec2, f32)> {
+        let (y, py) = self.marginal.sample_continuous(u.y)?;
+        let row = ((y * self.conditional.len() as f32) as usize).min(self.conditional.len() - 1);
+        let (x, px) = self.conditional[row].sample_continuous(u.x)?;
+        Some((glam::Vec2::new(x, y), px * py))
+    }
+
+    /// The density of `sample` at p in [0, 1]².
+    #[inline]
+    pub fn pdf(&self, p: glam::Vec2) -> f32 {
+        let nv = self.conditional.len();
+        if nv == 0 || !(0.0..=1.0).contains(&p.y) {
+            return 0.0;
+        }
+        let row = ((p.y * nv as f32) as usize).min(nv - 1);
+        self.marginal.pmf(row) * nv as f32 * self.conditional[row].pdf_continuous(p.x)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec2;
+
+    /// Continuous samples fall in bins as often as the weights say, inside the bin the
+    /// density says, and a zero-weight bin is never chosen.
+    #[test]
+    fn continuous_1d_follows_the_weights() {
+        let d = Distribution1D::new(&[1.0, 0.0, 3.0, 4.0]);
+        let n = 8000;
+        let mut counts = [0u32; 4];
+        for k in 0..n {
+            let u = (k as f32 + 0.5) / n as f32;
+            let (x, pdf) = d.sample_continuous(u).unwrap();
+            assert!((0.0..1.0).contains(&x));
+            let bin = (x * 4.0) as usize;
+            counts[bin] += 1;
+            assert_eq!(pdf, d.pdf_continuous(x));
+        }
+        assert_eq!(counts[1], 0);
+        for (c, w) in counts.iter().zip([1.0, 0.0, 3.0, 4.0]) {
+            assert!((*c as f32 / n as f32 - w / 8.0).abs() < 1e-3, "{counts:?}");
+        }
+        // Stratified u gives stratified x: the map is monotonic.
+        let xs: Vec<f32> = (0..100)
+            .map(|k| d.sample_continuous(k as f32 / 100.0).unwrap().0)
+            .collect();
+        assert!(xs.windows(2).all(|w| w[0] <= w[1]));
+    }
+
+    /// The 2D density integrates to one (a midpoint sum over a grid finer than the cells),
+    /// and every sample's density is the one `pdf` gives there.
+    #[test]
+    fn density_2d_integrates_to_one() {
+        let (nu, nv) = (5, 3);
+        let w: Vec<f32> = (0..nu * nv).map(|i| ((i * 7) % 5) as f32).collect();
+        let d = Distribution2D::new(&w, nu, nv);
+        let m = 60;
+        let mut sum = 0.0f64;
+        for j in 0..m {
+            for i in 0..m {
+                let p = Vec2::new((i as f32 + 0.5) / m as f32, (j as f32 + 0.5) / m as f32);
+                sum += d.pdf(p) as f64;
+            }
+        }
+        sum /= (m * m) as f64;
+        assert!((sum - 1.0).abs() < 1e-5, "{sum}");
+        for k in 0..500 {
+            let u = Vec2::new((k as f32 * 0.618_034) % 1.0, (k as f32 + 0.5) / 500.0);
+            let (p, pdf) = d.sample(u).unwrap();
+            assert!(pdf > 0.0);
+            assert!((pdf - d.pdf(p)).abs() <= 1e-5 * pdf, "{p} {pdf}");
+        }
+        let empty = Distribution2D::new(&[0.0; 6], 3, 2);
+        assert!(empty.is_empty() && empty.sample(Vec2::splat(0.5)).is_none());
+        assert_eq!(empty.pdf(Vec2::splat(0.5)), 0.0);
     }
 }

@@ -6,6 +6,8 @@
 //! the area density to solid angle: p_ω = p_A · d² / |cos θ_light| (Veach 1997, eq. 8.10).
 
 pub mod distribution;
+pub mod envmap;
+pub mod spot;
 
 use crate::geometry::{ray::gamma, Sphere, Triangle};
 use crate::Color;
@@ -133,7 +135,7 @@ impl AreaLight {
 }
 
 /// A light that is not a surface: a point, a direction, or the environment.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub enum OtherLight {
     /// Intensity I (W/sr) from a point.
     Point { p: Vec3A, intensity: Color },
@@ -141,6 +143,10 @@ pub enum OtherLight {
     Directional { dir: Vec3A, irradiance: Color },
     /// Constant radiance from every direction.
     Constant { radiance: Color },
+    /// Mitsuba's `spot`: a point light within a cone.
+    Spot(Box<spot::SpotLight>),
+    /// Mitsuba's `envmap`: radiance from a latitude-longitude image.
+    Envmap(std::sync::Arc<envmap::EnvMap>),
 }
 
 impl OtherLight {
@@ -155,6 +161,21 @@ impl OtherLight {
             OtherLight::Constant { radiance } => {
                 4.0 * std::f32::consts::PI * disk * mean(*radiance)
             }
+            OtherLight::Spot(s) => s.power(),
+            OtherLight::Envmap(e) => 4.0 * std::f32::consts::PI * disk * mean(e.mean()),
+        }
+    }
+
+    /// Radiance arriving from direction `d` (unit) and the solid-angle density of sampling
+    /// it, for the lights at infinity that a ray can reach (constant and image environments).
+    #[inline]
+    fn environment(&self, d: Vec3A) -> Option<(Color, f32)> {
+        match self {
+            OtherLight::Constant { radiance } => {
+                Some((*radiance, 1.0 / (4.0 * std::f32::consts::PI)))
+            }
+            OtherLight::Envmap(e) => Some((e.eval(d), e.pdf(d))),
+            _ => None,
         }
     }
 }
@@ -225,8 +246,9 @@ pub struct Lights {
     pub others: Vec<OtherLight>,
     /// Over area lights, then the others, by power.
     distribution: Distribution1D,
-    /// Index in `others` of the constant environment light, if any.
-    env: Option<usize>,
+    /// Indices in `others` of the environment lights (constant or image), which rays that
+    /// leave the scene see.
+    envs: Vec<usize>,
     /// The only light, if there is one and it is planar.
     planar: Option<PlanarLight>,
 }
@@ -244,9 +266,9 @@ impl Lights {
             .map(|l| l.power())
             .chain(others.iter().map(|o| o.power(radius)))
             .collect();
-        let env = others
-            .iter()
-            .position(|o| matches!(o, OtherLight::Constant { .. }));
+        let envs = (0..others.len())
+            .filter(|&i| others[i].environment(Vec3A::Y).is_some())
+            .collect();
         let distribution = Distribution1D::new(&powers);
         let planar = match (&lights[..], others.len(), distribution.len()) {
             ([l], 0, 1) => PlanarLight::new(l),
@@ -256,7 +278,7 @@ impl Lights {
             distribution,
             lights,
             others,
-            env,
+            envs,
             planar,
         }
     }
@@ -288,16 +310,23 @@ impl Lights {
         }
     }
 
-    /// Radiance arriving along a ray that leaves the scene, and the solid-angle density with
-    /// which light sampling would have chosen its direction.
+    /// Radiance arriving along a ray that leaves the scene in direction `d` (unit), and the
+    /// solid-angle density with which light sampling would have chosen that direction (over
+    /// all environment lights, each weighted by its probability of being chosen); None
+    /// without an environment light.
     #[inline]
-    pub fn environment(&self) -> Option<(Color, f32)> {
-        let i = self.env?;
-        let OtherLight::Constant { radiance } = self.others[i] else {
-            return None;
+    pub fn environment(&self, d: Vec3A) -> Option<(Color, f32)> {
+        let (&first, rest) = self.envs.split_first()?;
+        let one = |i: usize| {
+            let (le, pdf) = self.others[i].environment(d).unwrap_or_default();
+            (le, pdf * self.distribution.pmf(self.lights.len() + i))
         };
-        let pmf = self.distribution.pmf(self.lights.len() + i);
-        Some((radiance, pmf / (4.0 * std::f32::consts::PI)))
+        let mut sum = one(first);
+        for &i in rest {
+            let (le, pdf) = one(i);
+            sum = (sum.0 + le, sum.1 + pdf);
+        }
+        Some(sum)
     }
 
     /// Samples a light and a point on it as seen from `p`.
@@ -333,8 +362,8 @@ impl Lights {
 
     #[cold]
     fn sample_other(&self, i: usize, pmf: f32, p: Vec3A, u: Vec2) -> Option<LightSample> {
-        Some(match self.others[i] {
-            OtherLight::Point { p: pl, intensity } => {
+        Some(match &self.others[i] {
+            &OtherLight::Point { p: pl, intensity } => {
                 let d = pl - p;
                 let dist2 = d.length_squared();
                 if dist2 == 0.0 {
@@ -352,7 +381,7 @@ impl Lights {
                     infinite: false,
                 }
             }
-            OtherLight::Directional { dir, irradiance } => LightSample {
+            &OtherLight::Directional { dir, irradiance } => LightSample {
                 p: p - dir,
                 n: dir,
                 p_err: Vec3A::ZERO,
@@ -362,7 +391,42 @@ impl Lights {
                 delta: true,
                 infinite: true,
             },
-            OtherLight::Constant { radiance } => {
+            OtherLight::Spot(s) => {
+                let d = s.position - p;
+                let dist2 = d.length_squared();
+                if dist2 == 0.0 {
+                    return None;
+                }
+                let wi = d / dist2.sqrt();
+                let le = s.intensity_towards(-wi);
+                if le == Color::ZERO {
+                    return None;
+                }
+                LightSample {
+                    p: s.position,
+                    n: -wi,
+                    p_err: Vec3A::ZERO,
+                    wi,
+                    le: le / dist2,
+                    pdf: pmf,
+                    delta: true,
+                    infinite: false,
+                }
+            }
+            OtherLight::Envmap(e) => {
+                let (wi, le, pdf) = e.sample(u)?;
+                LightSample {
+                    p: p + wi,
+                    n: -wi,
+                    p_err: Vec3A::ZERO,
+                    wi,
+                    le,
+                    pdf: pmf * pdf,
+                    delta: false,
+                    infinite: true,
+                }
+            }
+            &OtherLight::Constant { radiance } => {
                 let wi = crate::material::sampling::square_to_uniform_sphere(u);
                 LightSample {
                     p: p + wi,

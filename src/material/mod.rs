@@ -9,6 +9,7 @@ pub mod dielectric;
 pub mod lambert;
 pub mod microfacet;
 pub mod mirror;
+pub mod normal_map;
 pub mod oren_nayar;
 pub mod plastic;
 pub mod rough_conductor;
@@ -93,6 +94,16 @@ pub struct Material {
     /// A texture (index into the scene's) giving the BSDF's main colour per hit: diffuse
     /// reflectance, or a metal's specular reflectance.
     pub texture: Option<u32>,
+    /// `normalmap`: an RGB texture of shading-frame normals ([`normal_map`]).
+    pub normal_map: Option<u32>,
+    /// `bumpmap`: a height texture and its scale ([`normal_map`]).
+    pub bump: Option<normal_map::Bump>,
+    /// `mask`: a texture whose value (clamped to [0, 1]) is the probability that a ray sees
+    /// the surface at all ([`crate::scene::mask`]); None for opaque surfaces.
+    pub opacity: Option<u32>,
+    /// At a hit of a normal- or bump-mapped material ([`crate::scene::Scene::material_at`]):
+    /// the unperturbed normal, which the BSDF's value and sampling weight depend on.
+    pub perturbed: Option<normal_map::Perturbed>,
 }
 
 impl Material {
@@ -101,7 +112,23 @@ impl Material {
             bsdf,
             two_sided,
             texture: None,
+            normal_map: None,
+            bump: None,
+            opacity: None,
+            perturbed: None,
         }
+    }
+
+    /// Whether the material perturbs its shading normal (normal or bump map).
+    #[inline]
+    pub fn perturbs(&self) -> bool {
+        self.normal_map.is_some() || self.bump.is_some()
+    }
+
+    /// Whether anything of the material varies with the texture coordinates of a hit.
+    #[inline]
+    pub fn reads_uv(&self) -> bool {
+        self.texture.is_some() || self.perturbs() || self.opacity.is_some()
     }
 
     /// Whether the BSDF has a main colour a texture can give.
@@ -186,6 +213,22 @@ impl Material {
     /// f(wo, wi) in either transport mode (only rough refraction tells them apart).
     #[inline]
     pub fn eval_mode(&self, wo: Vec3A, wi: Vec3A, mode: TransportMode) -> Color {
+        match &self.perturbed {
+            None => self.eval_nested(wo, wi, mode),
+            Some(p) => {
+                let f = p.factor(wi);
+                if f == 0.0 {
+                    Color::ZERO
+                } else {
+                    f * self.eval_nested(wo, wi, mode)
+                }
+            }
+        }
+    }
+
+    /// [`Material::eval_mode`] of the BSDF itself, in the (perturbed) shading frame.
+    #[inline]
+    fn eval_nested(&self, wo: Vec3A, wi: Vec3A, mode: TransportMode) -> Color {
         if let Bsdf::RoughDielectric(b) = &self.bsdf {
             return b.eval(wo, wi, mode);
         }
@@ -208,6 +251,21 @@ impl Material {
     /// test and one match: what next-event estimation needs for each shadow ray.
     #[inline(always)]
     pub fn eval_pdf(&self, wo: Vec3A, wi: Vec3A) -> (Color, f32) {
+        match &self.perturbed {
+            None => self.eval_pdf_nested(wo, wi),
+            Some(p) => {
+                let f = p.factor(wi);
+                if f == 0.0 {
+                    return (Color::ZERO, 0.0);
+                }
+                let (v, pdf) = self.eval_pdf_nested(wo, wi);
+                (f * v, pdf)
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn eval_pdf_nested(&self, wo: Vec3A, wi: Vec3A) -> (Color, f32) {
         if let Bsdf::RoughDielectric(b) = &self.bsdf {
             return (b.eval(wo, wi, TransportMode::Radiance), b.pdf(wo, wi));
         }
@@ -229,6 +287,14 @@ impl Material {
     /// Solid-angle pdf of sampling `wi` given `wo`. Zero for delta BSDFs.
     #[inline]
     pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
+        match &self.perturbed {
+            Some(p) if p.factor(wi) == 0.0 => 0.0,
+            _ => self.pdf_nested(wo, wi),
+        }
+    }
+
+    #[inline]
+    fn pdf_nested(&self, wo: Vec3A, wi: Vec3A) -> f32 {
         if let Bsdf::RoughDielectric(b) = &self.bsdf {
             return b.pdf(wo, wi);
         }
@@ -248,6 +314,25 @@ impl Material {
     /// Samples wi. `u1` picks among lobes (reflection or refraction), `u2` the direction.
     #[inline(always)]
     pub fn sample(&self, wo: Vec3A, u1: f32, u2: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+        let mut bs = self.sample_nested(wo, u1, u2, mode)?;
+        if let Some(p) = &self.perturbed {
+            let f = p.factor(bs.wi);
+            if f == 0.0 {
+                return None;
+            }
+            bs.weight *= f;
+        }
+        Some(bs)
+    }
+
+    #[inline(always)]
+    fn sample_nested(
+        &self,
+        wo: Vec3A,
+        u1: f32,
+        u2: Vec2,
+        mode: TransportMode,
+    ) -> Option<BsdfSample> {
         let s = self.orient(wo)?;
         let flip = Vec3A::new(1.0, 1.0, s);
         let wo_f = wo * flip;

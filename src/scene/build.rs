@@ -18,6 +18,7 @@ impl Scene {
     /// with a message (the CLI checks before it builds).
     pub fn build(mut desc: SceneDesc) -> Scene {
         let mut times = BuildTimes::start();
+        let masked = desc.materials.iter().any(|m| m.opacity.is_some());
         // Primitives in the description's order: vertex indices (or a sphere), material and
         // flags, and bounds.
         let mut tris: Vec<[u32; 3]> = Vec::new();
@@ -48,11 +49,12 @@ impl Scene {
                     // Texture coordinates matter only under a texture: without one the hit
                     // skips the search for its mesh's attributes (which cost a ray in the
                     // Cornell box, whose quads all have them, 45 instructions).
-                    let textured = desc
-                        .materials
-                        .get(shape.material as usize)
-                        .is_some_and(|mat| mat.texture.is_some());
-                    if mesh.normals.is_some() || (mesh.uvs.is_some() && textured) {
+                    // (A normal or bump map needs the flag for its partials, with or
+                    // without texture coordinates.)
+                    let mat = desc.materials.get(shape.material as usize);
+                    let textured = mat.is_some_and(|mat| mat.reads_uv());
+                    let perturbs = mat.is_some_and(|mat| mat.perturbs());
+                    if mesh.normals.is_some() || (mesh.uvs.is_some() && textured) || perturbs {
                         m |= META_ATTRS;
                         attrs.push(MeshAttrs {
                             first_vertex: base,
@@ -169,6 +171,29 @@ impl Scene {
                     irradiance,
                 },
                 LightDesc::Constant { radiance } => OtherLight::Constant { radiance },
+                LightDesc::Spot {
+                    to_world,
+                    intensity,
+                    cutoff_angle,
+                    beam_width,
+                    texture,
+                } => OtherLight::Spot(Box::new(crate::light::spot::SpotLight::new(
+                    to_world.w_axis.truncate().into(),
+                    glam::Mat3::from_mat4(to_world),
+                    intensity,
+                    cutoff_angle,
+                    beam_width,
+                    texture.and_then(|t| desc.textures.get(t as usize).cloned()),
+                ))),
+                LightDesc::Envmap {
+                    ref image,
+                    scale,
+                    to_world,
+                } => OtherLight::Envmap(std::sync::Arc::new(crate::light::envmap::EnvMap::new(
+                    image,
+                    scale,
+                    glam::Mat3::from_mat4(to_world),
+                ))),
             })
             .collect();
         // The padding vertex that `Scene::vertex_fast` may read past the last one.
@@ -180,7 +205,7 @@ impl Scene {
         let meta = permuted(meta, &order);
         times.mark("reorder");
         #[cfg(target_arch = "x86_64")]
-        let flat = flat(&tris, &positions);
+        let flat = flat(&tris, &positions).filter(|_| !masked);
         // `emitting` is sorted by primitive.
         let emitters = if emitting.is_empty() {
             Vec::new()
@@ -215,6 +240,7 @@ impl Scene {
             textures: desc.textures,
             cameras: desc.cameras,
             desc_settings: desc.settings,
+            masked,
         }
     }
 }

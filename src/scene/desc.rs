@@ -56,6 +56,23 @@ pub enum LightDesc {
     Directional { direction: Vec3, irradiance: Color },
     /// Constant radiance arriving from every direction (a uniform environment).
     Constant { radiance: Color },
+    /// Mitsuba's `spot` ([`crate::light::spot`]): at the origin of `to_world`, along its +z.
+    Spot {
+        to_world: glam::Mat4,
+        intensity: Color,
+        /// Degrees.
+        cutoff_angle: f32,
+        beam_width: f32,
+        /// Index into `SceneDesc::textures` of the projected texture.
+        texture: Option<u32>,
+    },
+    /// Mitsuba's `envmap` ([`crate::light::envmap`]): a latitude-longitude image times
+    /// `scale`, turned by `to_world` (a rotation).
+    Envmap {
+        image: std::sync::Arc<crate::texture::Bitmap>,
+        scale: f32,
+        to_world: glam::Mat4,
+    },
 }
 
 #[derive(Clone, Debug, Default)]

@@ -8,7 +8,9 @@ pub mod build;
 pub mod desc;
 pub mod error;
 pub mod gltf;
+pub mod mask;
 pub mod obj;
+mod perturb;
 pub mod ply;
 pub mod text;
 pub mod toml;
@@ -56,8 +58,11 @@ pub struct Interaction {
     pub p_err: Vec3A,
     /// Unit geometric normal, oriented as the geometry defines it (front side).
     pub ng: Vec3A,
-    /// Unit shading normal, on the same side as `ng`.
+    /// Unit shading normal, on the same side as `ng` (a normal or bump map may tilt it
+    /// beyond; see [`crate::material::normal_map`]).
     pub ns: Vec3A,
+    /// The shading normal before a normal or bump map perturbed `ns`; `ns` elsewhere.
+    pub ns_base: Vec3A,
     pub t: f32,
     /// Texture coordinates: the mesh's, interpolated, under a texture; barycentric (b1, b2)
     /// on a mesh without them or without a texture to read them; (φ/2π, θ/π) on a textured
@@ -123,6 +128,9 @@ pub struct Scene {
     pub textures: Vec<crate::texture::Texture>,
     pub cameras: Vec<(String, CameraDesc)>,
     pub desc_settings: desc::FileSettings,
+    /// Whether a material has an opacity (`mask`): rays then pass its surfaces by chance
+    /// ([`mask`]).
+    pub(crate) masked: bool,
     /// How long each phase of `Scene::build` took.
     pub build_times: crate::accel::BuildTimes,
 }
@@ -182,6 +190,9 @@ impl Scene {
     /// Closest hit along the ray, if any.
     #[inline(always)]
     pub fn intersect(&self, ray: &Ray) -> Option<Interaction> {
+        if self.masked {
+            return self.closest(ray, |i, u, v, t| self.seen(ray, i, u, v, t));
+        }
         #[cfg(target_arch = "x86_64")]
         if let Some(f) = &self.flat {
             let (i, t, u, v) = f.intersect(
@@ -192,6 +203,16 @@ impl Scene {
             )?;
             return Some(self.interaction(ray, i, u, v, t));
         }
+        self.closest(ray, |_, _, _, _| true)
+    }
+
+    /// The closest hit through the BVH of those `keep` keeps (given the primitive, u, v, t).
+    #[inline(always)]
+    fn closest(
+        &self,
+        ray: &Ray,
+        keep: impl Fn(usize, f32, f32, f32) -> bool,
+    ) -> Option<Interaction> {
         // Of equally near hits the lowest primitive, whatever the order the traversal
         // visits them in (as `accel::flat` finds them): a primitive is tested without a
         // bound (its tests read `t_max` only to accept their answer), and its hit kept if
@@ -203,7 +224,7 @@ impl Scene {
             #[inline(always)]
             |i, t_max| {
                 let (t, u, v) = self.hit(ray, i, f32::INFINITY)?;
-                (t < t_max || (t == t_max && i < best.0)).then(|| {
+                ((t < t_max || (t == t_max && i < best.0)) && keep(i, u, v, t)).then(|| {
                     best = (i, u, v, t);
                     t
                 })
@@ -231,6 +252,7 @@ impl Scene {
             let (p, p_err) = tri.point(u, v);
             let ng = tri.normal_unnormalized().normalize();
             let (mut ns, mut uv) = (ng, Vec2::new(u, v));
+            let mut uv3 = None;
             if meta & META_ATTRS != 0 {
                 let m = self.mesh_attrs(idx[0]);
                 let local = idx.map(|k| (k - m.first_vertex) as usize);
@@ -248,49 +270,52 @@ impl Scene {
                     };
                 }
                 if m.uvs != u32::MAX {
-                    let uv3 = &self.uvs[m.uvs as usize..];
-                    let [t0, t1, t2] = local.map(|k| uv3[k]);
+                    let uvs = &self.uvs[m.uvs as usize..];
+                    let [t0, t1, t2] = local.map(|k| uvs[k]);
                     uv = t0 * (1.0 - u - v) + t1 * u + t2 * v;
+                    uv3 = Some([t0, t1, t2]);
                 }
             }
-            Interaction {
+            let mut si = Interaction {
                 p,
                 p_err,
                 ng,
                 ns,
+                ns_base: ns,
                 t: t_hit,
                 uv,
                 material,
                 light,
+            };
+            if meta & META_ATTRS != 0 && self.materials[material as usize].perturbs() {
+                self.perturb_triangle(&mut si, ray, &tri, uv3);
             }
+            si
         } else {
             let s = &self.spheres[idx[1] as usize];
             let (p, n, p_err) = s.surface_point(ray.at(t_hit));
             // The angles only where a texture reads them (an arctangent and an arccosine).
-            let uv = if self.materials[material as usize].texture.is_some() {
-                let phi = n.y.atan2(n.x);
-                let phi = if phi < 0.0 {
-                    phi + std::f32::consts::TAU
-                } else {
-                    phi
-                };
-                Vec2::new(
-                    phi / std::f32::consts::TAU,
-                    n.z.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
-                )
+            let mat = &self.materials[material as usize];
+            let uv = if mat.reads_uv() {
+                sphere_uv(n)
             } else {
                 Vec2::ZERO
             };
-            Interaction {
+            let mut si = Interaction {
                 p,
                 p_err,
                 ng: n,
                 ns: n,
+                ns_base: n,
                 t: t_hit,
                 uv,
                 material,
                 light,
+            };
+            if mat.perturbs() {
+                self.perturb_sphere(&mut si, ray, s.radius);
             }
+            si
         }
     }
 
@@ -310,6 +335,12 @@ impl Scene {
     /// True if anything blocks the ray before parametric distance `t_max`.
     #[inline(always)]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        if self.masked {
+            return self.bvh.occluded(ray, t_max, |i, t_max| {
+                self.hit(ray, i, t_max)
+                    .is_some_and(|(t, u, v)| self.seen(ray, i, u, v, t))
+            });
+        }
         #[cfg(target_arch = "x86_64")]
         if let Some(f) = &self.flat {
             return f.occluded(
@@ -357,6 +388,13 @@ impl Scene {
         };
         // SAFETY: the BVH's leaves name primitives below tris.len() (Scene::build).
         let [a, b, c] = unsafe { *self.tris.get_unchecked(i) };
+        if self.masked && self.has_opacity(i) {
+            return each(lanes, &|l| {
+                let ray = pk.ray(l);
+                self.hit(&ray, i, pk.t_max[l])
+                    .is_some_and(|(t, u, v)| self.seen(&ray, i, u, v, t))
+            });
+        }
         if lanes & (lanes - 1) == 0 {
             return each(lanes, &|l| self.hit(&pk.ray(l), i, pk.t_max[l]).is_some());
         }
@@ -438,6 +476,9 @@ impl Scene {
     #[doc(hidden)]
     #[cfg(target_arch = "x86_64")]
     pub fn with_flat_kernel(mut self, kernel: crate::accel::flat::Kernel) -> Scene {
+        if self.masked {
+            return self; // brute force does not test opacity
+        }
         if let Some(f) = build::flat_with(&self.tris, &self.positions, Some(kernel)) {
             self.flat = Some(f);
         }
@@ -458,11 +499,26 @@ impl Scene {
     /// The material at a hit, its texture (if any) evaluated there.
     #[inline]
     pub fn material_at(&self, si: &Interaction) -> Material {
-        let m = self.materials[si.material as usize];
-        match m.texture {
-            None => m,
-            Some(t) => m.with_color(self.textures[t as usize].eval(si.uv)),
+        let mut m = self.materials[si.material as usize];
+        if let Some(t) = m.texture {
+            m = m.with_color(self.textures[t as usize].eval(si.uv));
         }
+        if m.perturbs() {
+            m.perturbed = Some(crate::material::normal_map::Perturbed::new(
+                si.ns, si.ns_base,
+            ));
+        }
+        m
+    }
+
+    /// The mesh texture coordinates of triangle `idx`'s vertices, if its mesh has them
+    /// (kept for primitives flagged META_ATTRS only).
+    fn vertex_uvs(&self, idx: [u32; 3]) -> Option<[Vec2; 3]> {
+        let m = self.mesh_attrs(idx[0]);
+        (m.uvs != u32::MAX).then(|| {
+            let uvs = &self.uvs[m.uvs as usize..];
+            idx.map(|k| uvs[(k - m.first_vertex) as usize])
+        })
     }
 
     pub fn camera(&self, name: Option<&str>) -> Option<&CameraDesc> {
@@ -480,4 +536,19 @@ impl Scene {
     pub fn triangle_count(&self) -> usize {
         self.tris.len() - self.spheres.len()
     }
+}
+
+/// Texture coordinates on a sphere at unit normal `n` (Mitsuba's): (φ/2π, θ/π).
+#[inline]
+fn sphere_uv(n: Vec3A) -> Vec2 {
+    let phi = n.y.atan2(n.x);
+    let phi = if phi < 0.0 {
+        phi + std::f32::consts::TAU
+    } else {
+        phi
+    };
+    Vec2::new(
+        phi / std::f32::consts::TAU,
+        n.z.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
+    )
 }

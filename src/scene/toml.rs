@@ -103,6 +103,9 @@ struct CameraT {
     up: Option<Spanned<V3>>,
     fov: Option<Spanned<f32>>,
     fov_axis: Option<Spanned<String>>,
+    aperture_radius: Option<Spanned<f32>>,
+    focus_distance: Option<Spanned<f32>>,
+    view_width: Option<Spanned<f32>>,
 }
 
 #[derive(Deserialize)]
@@ -152,6 +155,13 @@ struct LightT {
     direction: Option<Spanned<V3>>,
     irradiance: Option<Spanned<ColorT>>,
     radiance: Option<Spanned<ColorT>>,
+    cutoff_angle: Option<Spanned<f32>>,
+    beam_width: Option<Spanned<f32>>,
+    texture: Option<Spanned<String>>,
+    up: Option<Spanned<V3>>,
+    to_world: Option<Spanned<[[f32; 4]; 4]>>,
+    file: Option<Spanned<String>>,
+    scale: Option<Spanned<f32>>,
 }
 
 #[derive(Deserialize)]
@@ -470,6 +480,9 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
             ("up", span_of(&c.up)),
             ("fov", span_of(&c.fov)),
             ("fov_axis", span_of(&c.fov_axis)),
+            ("aperture_radius", span_of(&c.aperture_radius)),
+            ("focus_distance", span_of(&c.focus_distance)),
+            ("view_width", span_of(&c.view_width)),
         ];
         let cd = match c.kind.get_ref().as_str() {
             "pinhole" => {
@@ -502,13 +515,27 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                         .transpose()?,
                 }
             }
-            "perspective" => {
-                let what = "a perspective camera";
-                cx.only(
-                    &present,
-                    &["origin", "target", "up", "fov", "fov_axis"],
-                    what,
-                )?;
+            "perspective" | "thinlens" => {
+                let thin = c.kind.get_ref() == "thinlens";
+                let what = if thin {
+                    "a thinlens camera"
+                } else {
+                    "a perspective camera"
+                };
+                let keys: &[&str] = if thin {
+                    &[
+                        "origin",
+                        "target",
+                        "up",
+                        "fov",
+                        "fov_axis",
+                        "aperture_radius",
+                        "focus_distance",
+                    ]
+                } else {
+                    &["origin", "target", "up", "fov", "fov_axis"]
+                };
+                cx.only(&present, keys, what)?;
                 let origin = cx.finite3(cx.need(&c.origin, "origin", what, &at)?, "origin")?;
                 let target = cx.finite3(cx.need(&c.target, "target", what, &at)?, "target")?;
                 let up = cx.finite3(cx.need(&c.up, "up", what, &at)?, "up")?;
@@ -528,18 +555,54 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                         Ok,
                     )?,
                 };
-                CameraDesc::Perspective {
-                    origin,
-                    target,
-                    up,
-                    fov: *fov.get_ref(),
-                    fov_axis,
+                let fov = *fov.get_ref();
+                if thin {
+                    let radius = cx.need(&c.aperture_radius, "aperture_radius", what, &at)?;
+                    if !(*radius.get_ref() >= 0.0 && radius.get_ref().is_finite()) {
+                        return cx.err(radius.span(), "'aperture_radius' must be a number ≥ 0");
+                    }
+                    let focus = cx.need(&c.focus_distance, "focus_distance", what, &at)?;
+                    if !(*focus.get_ref() > 0.0 && focus.get_ref().is_finite()) {
+                        return cx.err(focus.span(), "'focus_distance' must be a number > 0");
+                    }
+                    CameraDesc::ThinLens {
+                        origin,
+                        target,
+                        up,
+                        fov,
+                        fov_axis,
+                        aperture_radius: *radius.get_ref(),
+                        focus_distance: *focus.get_ref(),
+                    }
+                } else {
+                    CameraDesc::Perspective {
+                        origin,
+                        target,
+                        up,
+                        fov,
+                        fov_axis,
+                    }
                 }
+            }
+            "orthographic" => {
+                let what = "an orthographic camera";
+                cx.only(&present, &["origin", "target", "up", "view_width"], what)?;
+                let origin = cx.finite3(cx.need(&c.origin, "origin", what, &at)?, "origin")?;
+                let target = cx.finite3(cx.need(&c.target, "target", what, &at)?, "target")?;
+                let up = cx.finite3(cx.need(&c.up, "up", what, &at)?, "up")?;
+                let w = cx.need(&c.view_width, "view_width", what, &at)?;
+                if !(*w.get_ref() > 0.0 && w.get_ref().is_finite()) {
+                    return cx.err(w.span(), "'view_width' must be a number > 0");
+                }
+                CameraDesc::orthographic_look_at(origin, target, up, *w.get_ref())
             }
             other => {
                 return cx.err(
                     c.kind.span(),
-                    format!("unknown camera type '{other}' (expected 'pinhole' or 'perspective')"),
+                    format!(
+                        "unknown camera type '{other}' (expected 'pinhole', 'perspective', \
+                         'thinlens' or 'orthographic')"
+                    ),
                 )
             }
         };
@@ -841,7 +904,7 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
         });
     }
     for light in &file.light {
-        desc.lights.push(light_desc(&cx, light)?);
+        desc.lights.push(light_desc(&cx, light, &tex, base)?);
     }
     if let Some(name) = &desc.settings.camera {
         if !desc.cameras.iter().any(|(n, _)| n == name) {
@@ -1217,7 +1280,12 @@ fn texture(cx: &Ctx, t: &Spanned<TextureT>, base: &Path) -> Result<Texture, Scen
     }
 }
 
-fn light_desc(cx: &Ctx, l: &Spanned<LightT>) -> Result<LightDesc, SceneError> {
+fn light_desc(
+    cx: &Ctx,
+    l: &Spanned<LightT>,
+    tex: &Textures,
+    base: &Path,
+) -> Result<LightDesc, SceneError> {
     let v = l.get_ref();
     let at = l.span();
     let present = [
@@ -1226,6 +1294,13 @@ fn light_desc(cx: &Ctx, l: &Spanned<LightT>) -> Result<LightDesc, SceneError> {
         ("direction", span_of(&v.direction)),
         ("irradiance", span_of(&v.irradiance)),
         ("radiance", span_of(&v.radiance)),
+        ("cutoff_angle", span_of(&v.cutoff_angle)),
+        ("beam_width", span_of(&v.beam_width)),
+        ("texture", span_of(&v.texture)),
+        ("up", span_of(&v.up)),
+        ("to_world", span_of(&v.to_world)),
+        ("file", span_of(&v.file)),
+        ("scale", span_of(&v.scale)),
     ];
     match v.kind.get_ref().as_str() {
         "point" => {
@@ -1255,9 +1330,193 @@ fn light_desc(cx: &Ctx, l: &Spanned<LightT>) -> Result<LightDesc, SceneError> {
                 radiance: cx.color(cx.need(&v.radiance, "radiance", &what, &at)?, "radiance", None)?,
             })
         }
+        "spot" => {
+            cx.only(
+                &present,
+                &[
+                    "position",
+                    "direction",
+                    "up",
+                    "to_world",
+                    "intensity",
+                    "cutoff_angle",
+                    "beam_width",
+                    "texture",
+                ],
+                "a spot light",
+            )?;
+            spot_desc(cx, v, &at, tex)
+        }
+        "envmap" => {
+            cx.only(&present, &["file", "scale", "to_world"], "an envmap light")?;
+            envmap_desc(cx, v, &at, base)
+        }
         other => cx.err(
             v.kind.span(),
-            format!("unknown light type '{other}' (expected point, directional, constant or environment)"),
+            format!("unknown light type '{other}' (expected point, directional, spot, constant, environment or envmap)"),
         ),
     }
+}
+
+/// A `to_world` matrix: four rows of four finite numbers (as Mitsuba's `<matrix>`), whose
+/// last row is (0, 0, 0, 1).
+fn to_world(cx: &Ctx, m: &Spanned<[[f32; 4]; 4]>) -> Result<glam::Mat4, SceneError> {
+    let rows = m.get_ref();
+    if !rows.iter().flatten().all(|x| x.is_finite()) || rows[3] != [0.0, 0.0, 0.0, 1.0] {
+        return cx.err(
+            m.span(),
+            "'to_world' must be four rows of four finite numbers, the last [0, 0, 0, 1]",
+        );
+    }
+    Ok(glam::Mat4::from_cols_array_2d(rows).transpose())
+}
+
+/// A spot light (Mitsuba's `spot`): its frame from `to_world`, or from `position`,
+/// `direction` (the axis) and `up` (which turns a projected texture; default +y, or +z for
+/// a vertical axis) as Mitsuba's `<lookat>` makes it.
+fn spot_desc(
+    cx: &Ctx,
+    v: &LightT,
+    at: &std::ops::Range<usize>,
+    tex: &Textures,
+) -> Result<LightDesc, SceneError> {
+    let what = "a spot light";
+    let to_world = match &v.to_world {
+        Some(m) => {
+            if let Some(k) = [
+                ("position", &v.position),
+                ("direction", &v.direction),
+                ("up", &v.up),
+            ]
+            .iter()
+            .find_map(|(k, x)| x.as_ref().map(|x| (k, x.span())))
+            {
+                return cx.err(k.1, format!("'{}' and 'to_world' exclude each other", k.0));
+            }
+            let m4 = to_world(cx, m)?;
+            if let Some(f) = crate::light::spot::frame_fault(glam::Mat3::from_mat4(m4)) {
+                return cx.err(m.span(), f);
+            }
+            m4
+        }
+        None => {
+            let p = cx.finite3(cx.need(&v.position, "position", what, at)?, "position")?;
+            let d = cx.need(&v.direction, "direction", what, at)?;
+            let dir = cx.finite3(d, "direction")?;
+            let Some(axis) = dir.try_normalize() else {
+                return cx.err(d.span(), "'direction' must not be zero");
+            };
+            let up = match &v.up {
+                Some(u) => cx.finite3(u, "up")?,
+                None if axis.y.abs() > 0.999 => glam::Vec3::Z,
+                None => glam::Vec3::Y,
+            };
+            match crate::scene::xml::lookat(p, p + axis, up) {
+                Some(m) => m,
+                None => {
+                    let s = v.up.as_ref().map_or(d.span(), |u| u.span());
+                    return cx.err(s, "'up' must not be zero or parallel to 'direction'");
+                }
+            }
+        }
+    };
+    let intensity = match &v.intensity {
+        Some(i) => cx.color(i, "intensity", None)?,
+        None => Color::ONE,
+    };
+    let cutoff_angle = v.cutoff_angle.as_ref().map_or(20.0, |c| *c.get_ref());
+    let beam_width = v
+        .beam_width
+        .as_ref()
+        .map_or(cutoff_angle * 0.75, |b| *b.get_ref());
+    if let Some(f) = crate::light::spot::angles_fault(cutoff_angle, beam_width) {
+        let s = match (&v.cutoff_angle, &v.beam_width) {
+            (Some(c), _) if f.starts_with("'cutoff") => c.span(),
+            (_, Some(b)) if f.starts_with("'beam") => b.span(),
+            _ => at.clone(),
+        };
+        return cx.err(s, f);
+    }
+    let texture = match &v.texture {
+        None => None,
+        Some(t) => match tex.ids.get(t.get_ref().as_str()) {
+            Some(&i) => Some(i),
+            None => {
+                let known: Vec<&str> = tex.ids.keys().copied().collect();
+                return cx.err(
+                    t.span(),
+                    format!(
+                        "unknown texture '{}' (defined: {})",
+                        crate::input::shorten(t.get_ref()),
+                        list_or_none(&known)
+                    ),
+                );
+            }
+        },
+    };
+    Ok(LightDesc::Spot {
+        to_world,
+        intensity,
+        cutoff_angle,
+        beam_width,
+        texture,
+    })
+}
+
+/// An image environment (Mitsuba's `envmap`): `file` (OpenEXR, Radiance HDR or PNG), `scale`
+/// (default 1, not negative) and `to_world` (a rotation).
+fn envmap_desc(
+    cx: &Ctx,
+    v: &LightT,
+    at: &std::ops::Range<usize>,
+    base: &Path,
+) -> Result<LightDesc, SceneError> {
+    let f = cx.need(&v.file, "file", "an envmap light", at)?;
+    let scale = match &v.scale {
+        Some(s) if *s.get_ref() < 0.0 => {
+            return cx.err(
+                s.span(),
+                format!("'scale' must not be negative, got {}", s.get_ref()),
+            )
+        }
+        Some(s) => *s.get_ref(),
+        None => 1.0,
+    };
+    let to_world = match &v.to_world {
+        Some(m) => to_world(cx, m)?,
+        None => glam::Mat4::IDENTITY,
+    };
+    let p = base.join(f.get_ref());
+    if let Some(why) = crate::input::file_problem(&p) {
+        return cx.err(
+            f.span(),
+            format!(
+                "environment map '{}' {why} (looked for {})",
+                crate::input::shorten(f.get_ref()),
+                p.display()
+            ),
+        );
+    }
+    let image = match Bitmap::load(&p, false) {
+        Ok(b) => b,
+        Err(e) => {
+            return cx.err(
+                f.span(),
+                format!("cannot load environment map {}: {}", p.display(), e.message),
+            )
+        }
+    };
+    let m3 = glam::Mat3::from_mat4(to_world);
+    if let Some(fault) = crate::light::envmap::fault(image.width, image.height, m3) {
+        let s = match &v.to_world {
+            Some(m) if !fault.contains("pixels") => m.span(),
+            _ => f.span(),
+        };
+        return cx.err(s, fault);
+    }
+    Ok(LightDesc::Envmap {
+        image: Arc::new(image),
+        scale,
+        to_world,
+    })
 }

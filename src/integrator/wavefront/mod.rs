@@ -187,6 +187,14 @@ impl<'a> Wavefront<'a> {
         // flat set (`accel::flat`: at most 64 triangles and 4 spheres); elsewhere it uses the
         // BVH, which for a grazing ray may skip a primitive brute force would test. So the
         // lanes, which test every primitive, match it only where it does too.
+        // The lanes make pinhole rays (`Lanes::start`); a thin lens's and an orthographic
+        // camera's rays are the path tracer's.
+        if scene
+            .camera(s.camera.as_deref())
+            .is_some_and(|c| !c.is_pinhole())
+        {
+            return None;
+        }
         let n = scene.tris.len();
         if n == 0 || n > MAX_PRIMS || !scene.is_flat() || !scene.attrs.is_empty() {
             return None;
@@ -227,7 +235,7 @@ impl<'a> Wavefront<'a> {
         for (j, &idx) in scene.tris.iter().enumerate() {
             let meta = scene.meta[j];
             let material = &scene.materials[(meta & META_MATERIAL) as usize];
-            if material.texture.is_some() {
+            if material.reads_uv() {
                 return None;
             }
             let (kind, colour) = match &material.bsdf {

@@ -8,14 +8,17 @@
 //! object does not use is an error (as in Mitsuba), so typos do not pass silently.
 
 mod document;
+mod emitters;
 mod objects;
 mod props;
+mod sensor;
 mod transform;
 
 use super::{SceneDesc, SceneError};
 use std::path::Path;
 
 pub use document::Elem;
+pub use transform::lookat;
 
 /// How to read an XML scene.
 #[derive(Clone, Debug, Default)]

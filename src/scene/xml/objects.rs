@@ -3,7 +3,6 @@
 
 use super::document::{Document, Elem};
 use super::props::{ColorSrc, Ids, Props, Result};
-use crate::camera::{CameraDesc, FovAxis};
 use crate::geometry::mesh::TriangleMesh;
 use crate::integrator::IntegratorKind;
 use crate::limits;
@@ -21,6 +20,8 @@ use glam::{Mat4, Vec2, Vec3};
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::Arc;
+
+mod wrappers;
 
 struct Builder<'a> {
     doc: &'a Document,
@@ -105,39 +106,16 @@ impl<'a> Builder<'a> {
     fn sensor(&mut self, e: &'a Elem, index: usize) -> Result<()> {
         let p = self.props(e)?;
         let kind = p.kind()?;
-        if kind != "perspective" {
-            return Err(self.doc.err_attr(
+        let camera = super::sensor::camera(&p, e, kind)?.ok_or_else(|| {
+            self.doc.err_attr(
                 e,
                 "type",
-                format!("sensor '{kind}' is not supported; mcrt has 'perspective'"),
-            ));
-        }
-        let fov = p.float_opt("fov")?.ok_or_else(|| {
-            self.doc.err(
-                e,
-                "a perspective sensor needs a 'fov' (focal_length is not supported)",
+                format!(
+                    "sensor '{kind}' is not supported; mcrt has {}",
+                    super::sensor::SENSORS
+                ),
             )
         })?;
-        if !(fov > 0.0 && fov < 180.0) {
-            return Err(self
-                .doc
-                .err(e, format!("fov must be in (0, 180) degrees, got {fov}")));
-        }
-        let axis = p.string("fov_axis", "x")?;
-        let fov_axis = FovAxis::parse(axis).ok_or_else(|| {
-            self.doc.err(
-                e,
-                format!("fov_axis '{axis}': expected x, y, diagonal, smaller or larger"),
-            )
-        })?;
-        let m = p.transform("to_world")?;
-        // Clipping planes change nothing in a scene whose geometry lies between them; they
-        // are accepted for compatibility.
-        p.ignore("near_clip");
-        p.ignore("far_clip");
-        let origin = m.transform_point3(Vec3::ZERO);
-        let dir = m.transform_vector3(Vec3::Z);
-        let up = m.transform_vector3(Vec3::Y);
         let name = e.attr("id").map(str::to_string).unwrap_or_else(|| {
             if index == 0 {
                 "default".into()
@@ -145,19 +123,6 @@ impl<'a> Builder<'a> {
                 format!("sensor{index}")
             }
         });
-        let camera = CameraDesc::Perspective {
-            origin,
-            target: origin + dir.normalize_or_zero(),
-            up: up.normalize_or_zero(),
-            fov,
-            fov_axis,
-        };
-        camera.validate().map_err(|why| {
-            self.doc.err(
-                e,
-                format!("the sensor's to_world is degenerate: the camera {why}"),
-            )
-        })?;
         self.desc.cameras.push((name, camera));
         for &obj in &p.objects {
             match obj.tag.as_str() {
@@ -514,6 +479,7 @@ impl<'a> Builder<'a> {
                 p.finish()?;
                 return self.bsdf(inner[0], true);
             }
+            "normalmap" | "bumpmap" | "mask" => return self.wrapper(e, &p, kind, two_sided),
             "diffuse" => {
                 let (c, t) = self.color_param(&p, "reflectance", 0.5)?;
                 texture = t;
@@ -584,7 +550,8 @@ impl<'a> Builder<'a> {
                     format!(
                         "bsdf '{kind}' is not supported; mcrt has diffuse, dielectric, \
                          thindielectric, roughdielectric, conductor, roughconductor, plastic, \
-                         roughplastic and twosided (--lenient renders it grey diffuse)"
+                         roughplastic, twosided, normalmap, bumpmap and mask (--lenient renders \
+                         it grey diffuse)"
                     ),
                 ));
             }
@@ -775,12 +742,14 @@ impl<'a> Builder<'a> {
             "constant" => LightDesc::Constant {
                 radiance: p.color("radiance", Color::ONE)?,
             },
+            "spot" => super::emitters::spot(self.doc, e, &p, &mut |t| self.texture(t))?,
+            "envmap" => super::emitters::envmap(self.doc, e, &p)?,
             "area" => return Err(self.doc.err(e, "an area emitter must be nested in a <shape>")),
             _ => {
                 return Err(self.doc.err_attr(
                     e,
                     "type",
-                    format!("emitter '{kind}' is not supported; mcrt has area, point, directional and constant"),
+                    format!("emitter '{kind}' is not supported; mcrt has area, point, directional, constant, spot and envmap"),
                 ))
             }
         };

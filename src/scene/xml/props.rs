@@ -389,6 +389,17 @@ impl<'a> Props<'a> {
         parse_transform(self.doc, e)
     }
 
+    /// The properties that are textures, whatever their names, marked used: for objects
+    /// that take a texture by its type (Mitsuba's `bumpmap`).
+    pub fn textures_any_name(&self) -> Vec<&'a Elem> {
+        let ts = self.props.iter().filter(|p| p.elem.tag == "texture");
+        ts.map(|p| {
+            p.used.set(true);
+            p.elem
+        })
+        .collect()
+    }
+
     /// Marks a property as known but ignored (it has no effect in mcrt).
     pub fn ignore(&self, name: &'static str) {
         self.find(name);
