@@ -263,14 +263,32 @@ bad_input!(xml_unknown_sensor_xml, "xml-unknown-sensor.xml");
 bad_input!(xml_unknown_shape_xml, "xml-unknown-shape.xml");
 bad_input!(xml_wrong_property_type_xml, "xml-wrong-property-type.xml");
 bad_input!(xml_zero_area_emitter_xml, "xml-zero-area-emitter.xml");
-bad_input!(xml_normalmap_without_bsdf_xml, "xml-normalmap-without-bsdf.xml");
-bad_input!(xml_normalmap_without_texture_xml, "xml-normalmap-without-texture.xml");
+bad_input!(
+    xml_normalmap_without_bsdf_xml,
+    "xml-normalmap-without-bsdf.xml"
+);
+bad_input!(
+    xml_normalmap_without_texture_xml,
+    "xml-normalmap-without-texture.xml"
+);
 bad_input!(xml_bumpmap_two_bsdfs_xml, "xml-bumpmap-two-bsdfs.xml");
-bad_input!(xml_bumpmap_without_texture_xml, "xml-bumpmap-without-texture.xml");
-bad_input!(xml_mask_opacity_above_one_xml, "xml-mask-opacity-above-one.xml");
-bad_input!(xml_mask_negative_opacity_xml, "xml-mask-negative-opacity.xml");
+bad_input!(
+    xml_bumpmap_without_texture_xml,
+    "xml-bumpmap-without-texture.xml"
+);
+bad_input!(
+    xml_mask_opacity_above_one_xml,
+    "xml-mask-opacity-above-one.xml"
+);
+bad_input!(
+    xml_mask_negative_opacity_xml,
+    "xml-mask-negative-opacity.xml"
+);
 bad_input!(xml_mask_emitter_child_xml, "xml-mask-emitter-child.xml");
-bad_input!(xml_normalmap_texture_child_xml, "xml-normalmap-texture-child.xml");
+bad_input!(
+    xml_normalmap_texture_child_xml,
+    "xml-normalmap-texture-child.xml"
+);
 bad_input!(xml_mask_in_mask_xml, "xml-mask-in-mask.xml");
 
 /// Every file of the corpus has its test above, and the corpus is as large as promised.
@@ -319,6 +337,7 @@ bad_input!(
 );
 
 // glTF 2.0 (written by tests/data/gltf/make_bad_inputs.py).
+bad_input!(gltf_clearcoat_strict_gltf, "gltf-clearcoat-strict.gltf");
 bad_input!(
     gltf_accessor_out_of_bounds_gltf,
     "gltf-accessor-out-of-bounds.gltf"
@@ -338,7 +357,6 @@ bad_input!(
     gltf_roughness_above_one_gltf,
     "gltf-roughness-above-one.gltf"
 );
-bad_input!(gltf_spot_light_strict_gltf, "gltf-spot-light-strict.gltf");
 bad_input!(gltf_truncated_glb, "gltf-truncated.glb");
 bad_input!(
     gltf_unsupported_extension_gltf,

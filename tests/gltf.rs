@@ -110,3 +110,110 @@ fn renders_like_its_mitsuba_twins() {
         100.0 * rel
     );
 }
+
+/// A one-triangle glTF with a camera and an emissive material; `camera` is the camera
+/// object, `material` the material, `extra` more top-level members (each with a leading
+/// comma) and `nodes` more nodes after the two (mesh, camera).
+fn triangle(camera: &str, material: &str, nodes: &str, extra: &str) -> String {
+    format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0,
+ "scenes": [{{"nodes": [0, 1{roots}]}}],
+ "nodes": [{{"mesh": 0}}, {{"name": "Cam", "camera": 0, "translation": [0, 0, 3]}}{nodes}],
+ "cameras": [{camera}],
+ "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1, "material": 0}}]}}],
+ "materials": [{material}],
+ "buffers": [{{"uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAABAAIAAAA=", "byteLength": 44}}],
+ "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": 36}}, {{"buffer": 0, "byteOffset": 36, "byteLength": 6}}],
+ "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}},
+               {{"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}}]{extra}}}"#,
+        roots = if nodes.is_empty() { "" } else { ", 2" },
+    )
+}
+
+const PERSPECTIVE: &str = r#"{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1}}"#;
+const EMISSIVE: &str = r#"{"emissiveFactor": [1, 1, 1]}"#;
+
+fn parse(json: &str, lenient: bool) -> Result<mcrt::scene::SceneDesc, mcrt::scene::SceneError> {
+    mcrt::scene::gltf::parse_gltf(std::path::Path::new("t.gltf"), json.as_bytes(), lenient)
+}
+
+/// An orthographic camera: parallel rays along −z; `xmag/ymag` sizes the image.
+#[test]
+fn orthographic_camera() {
+    let cam = r#"{"type": "orthographic", "orthographic": {"xmag": 3, "ymag": 2, "znear": 0.5, "zfar": 100}}"#;
+    let desc = parse(&triangle(cam, EMISSIVE, "", ""), false).unwrap();
+    match &desc.cameras[0].1 {
+        mcrt::camera::CameraDesc::Orthographic {
+            center,
+            half_x,
+            half_y,
+            dir,
+        } => {
+            assert_eq!(*dir, glam::Vec3::NEG_Z);
+            assert_eq!(*center, glam::Vec3::new(0.0, 0.0, 2.5));
+            assert_eq!(*half_x, glam::Vec3::new(-3.0, 0.0, 0.0));
+            assert_eq!(*half_y, glam::Vec3::new(0.0, 3.0, 0.0));
+        }
+        c => panic!("not orthographic: {c:?}"),
+    }
+    assert_eq!(
+        (desc.settings.width, desc.settings.height),
+        (Some(512), Some(341))
+    );
+}
+
+/// Approximations are refused by default, naming the first and counting the rest; with
+/// `--lenient` each is one warning line. A spot light (default cone: 0° to 45°) is exact.
+#[test]
+fn approximations_refused_unless_lenient() {
+    let mat = r#"{"emissiveFactor": [1, 1, 1], "pbrMetallicRoughness": {"metallicFactor": 0.3},
+        "extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 1.0}}}"#;
+    let lights = r#", "extensions": {"KHR_lights_punctual": {"lights": [{"type": "spot", "spot": {}, "intensity": 683}]}}"#;
+    let node = r#", {"extensions": {"KHR_lights_punctual": {"light": 0}}}"#;
+    let json = triangle(PERSPECTIVE, mat, node, lights);
+    let err = parse(&json, false).unwrap_err().to_string();
+    assert!(
+        err.contains("metallic 0.30 is rendered as a dielectric"),
+        "{err}"
+    );
+    assert!(
+        err.contains("(and 1 more)") && err.contains("--lenient"),
+        "{err}"
+    );
+    let desc = parse(&json, true).unwrap();
+    let approx: Vec<&String> = desc
+        .warnings
+        .iter()
+        .filter(|w| w.contains("approximated:"))
+        .collect();
+    assert_eq!(approx.len(), 2, "{:?}", desc.warnings);
+    assert!(approx.iter().any(|w| w.contains("clearcoat")));
+    // The spot light is Mitsuba's spot; its edge's falloff is a note in both modes.
+    assert!(desc.warnings.iter().any(|w| w.contains("fades linearly")));
+    assert!(matches!(
+        desc.lights[0],
+        mcrt::scene::desc::LightDesc::Spot { cutoff_angle, beam_width, .. }
+            if (cutoff_angle - 45.0).abs() < 1e-4 && beam_width == 0.0
+    ));
+}
+
+/// A normal texture becomes the material's normal map (linear values, glTF's `scale` on x
+/// and y); a material without one has none.
+#[test]
+fn normal_texture_is_a_normal_map() {
+    let png = "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAIAAACQd1PeAAAADElEQVR4nGNoaPgPAAODAgAApfuJAAAAAElFTkSuQmCC";
+    let mat = r#"{"emissiveFactor": [1, 1, 1], "normalTexture": {"index": 0, "scale": 0.5}}"#;
+    let extra = format!(
+        r#", "textures": [{{"source": 0}}], "images": [{{"uri": "data:image/png;base64,{png}"}}]"#
+    );
+    let desc = parse(&triangle(PERSPECTIVE, mat, "", &extra), false).unwrap();
+    let t = desc.materials[0].normal_map.expect("a normal map") as usize;
+    // The 1×1 image is (128, 128, 255): x, y near 0 stay there; z = 1.
+    let c = desc.textures[t].eval(glam::Vec2::splat(0.5));
+    assert!(
+        (c.x - 0.5).abs() < 0.01 && (c.y - 0.5).abs() < 0.01 && c.z == 1.0,
+        "{c}"
+    );
+    let plain = parse(&triangle(PERSPECTIVE, EMISSIVE, "", ""), false).unwrap();
+    assert!(plain.materials[0].normal_map.is_none());
+}

@@ -10,10 +10,6 @@ use glam::{Mat4, Vec3};
 /// The image's longer side when a camera gives its aspect ratio and no size is set.
 const DEFAULT_LONG_SIDE: u32 = 512;
 
-/// Distance, in units of the view's half height, from which a perspective camera stands
-/// in for an orthographic one (`--lenient`): its rays are within 0.06° of parallel.
-const ORTHO_DISTANCE: f32 = 1000.0;
-
 /// The perspective camera at a node with world transform `world` and vertical field of
 /// view `yfov` (radians): eye at the node's origin, looking down its −z, up its +y.
 pub fn perspective(world: &Mat4, yfov: f32) -> CameraDesc {
@@ -25,6 +21,22 @@ pub fn perspective(world: &Mat4, yfov: f32) -> CameraDesc {
         up: world.transform_vector3(Vec3::Y),
         fov: yfov.to_degrees(),
         fov_axis: FovAxis::Y,
+    }
+}
+
+/// The orthographic camera at a node: rays along its −z from the plane `znear` in front of
+/// it; `xmag` is the half width of the view. The half height is `xmag` over the image's
+/// aspect ratio, which is `ymag` when the image has the camera's aspect ratio (the size mcrt
+/// gives it unless told otherwise).
+pub fn orthographic(world: &Mat4, xmag: f32, znear: f32) -> CameraDesc {
+    let dir = world.transform_vector3(-Vec3::Z).normalize_or_zero();
+    let left = world.transform_vector3(-Vec3::X).normalize_or_zero();
+    let up = world.transform_vector3(Vec3::Y).normalize_or_zero();
+    CameraDesc::Orthographic {
+        center: world.transform_point3(Vec3::ZERO) + dir * znear.max(0.0),
+        half_x: left * xmag,
+        half_y: up * xmag,
+        dir,
     }
 }
 
@@ -54,13 +66,7 @@ pub fn add_camera(
                     "{where_}: xmag {xmag} and ymag {ymag} must be positive"
                 )));
             }
-            l.approximate(format!(
-                "{where_} is orthographic: rendered by a perspective camera {ORTHO_DISTANCE}×ymag \
-                 behind it with the same view height"
-            ));
-            let back = Mat4::from_translation(Vec3::Z * ORTHO_DISTANCE * ymag);
-            let yfov = 2.0 * (1.0 / ORTHO_DISTANCE).atan();
-            (perspective(&(*world * back), yfov), Some(xmag / ymag))
+            (orthographic(world, xmag, o.znear()), Some(xmag / ymag))
         }
     };
     desc.validate()
@@ -136,6 +142,29 @@ mod tests {
         let c = perspective(&roll, 1.0);
         let top = ray_dir(&c, 0.5, 0.0);
         assert!(top.x < -0.1 && top.y.abs() < 1e-5, "{top}");
+    }
+
+    /// An orthographic camera's rays are parallel, along −z; the image spans ±xmag across
+    /// and ±ymag up for an image of aspect xmag/ymag, +x to the right and +y at the top.
+    #[test]
+    fn orthographic_camera() {
+        let c = orthographic(&Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0)), 2.0, 0.0);
+        let cam = c.build(200, 100);
+        let ray =
+            |x: f32, y: f32| cam.generate_ray(x as u32, y as u32, Vec2::new(x.fract(), y.fract()));
+        let (tl, br) = (ray(0.0, 0.0), ray(199.999, 99.999));
+        assert!((Vec3::from(tl.d) - Vec3::NEG_Z).length() < 1e-6);
+        assert!((Vec3::from(br.d) - Vec3::NEG_Z).length() < 1e-6);
+        assert!(
+            (Vec3::from(tl.o) - Vec3::new(-1.0, 3.0, 3.0)).length() < 1e-3,
+            "{}",
+            tl.o
+        );
+        assert!(
+            (Vec3::from(br.o) - Vec3::new(3.0, 1.0, 3.0)).length() < 1e-3,
+            "{}",
+            br.o
+        );
     }
 
     /// Scale in the node's transform does not change the view.

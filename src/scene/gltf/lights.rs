@@ -1,5 +1,6 @@
 //! KHR_lights_punctual: point lights (intensity in candela, lm/sr), spot lights (candela,
-//! with a cone about the node's −z) and directional lights (illuminance in lux, lm/m²,
+//! with a cone about the node's −z; Mitsuba's `spot`, beam width = the inner cone angle,
+//! cutoff = the outer) and directional lights (illuminance in lux, lm/m²,
 //! travelling along the node's −z). mcrt's lights are radiometric (W/sr, W/m²); a lumen is
 //! taken as 1/683 W, the luminous efficacy of 555 nm light that Blender's exporter assumes
 //! ([`super::LUMENS_PER_WATT`]), so candela / 683 is W/sr and lux / 683 is W/m².
@@ -8,7 +9,7 @@ use super::{Loader, LUMENS_PER_WATT};
 use crate::scene::desc::LightDesc;
 use crate::scene::SceneError;
 use crate::Color;
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Quat, Vec3};
 
 /// The radiometric value of a photometric `intensity` of colour `color`.
 pub fn radiometric(color: [f32; 3], intensity: f32) -> Color {
@@ -43,16 +44,35 @@ pub fn add_light(
             intensity: value,
         }),
         Kind::Spot {
-            outer_cone_angle, ..
+            inner_cone_angle,
+            outer_cone_angle,
         } => {
-            l.approximate(format!(
-                "{where_} is a spot light (outer cone {:.1}°): rendered as a point light \
-                 shining in every direction",
-                outer_cone_angle.to_degrees()
-            ));
-            l.desc.lights.push(LightDesc::Point {
-                position,
+            let (inner, outer) = (inner_cone_angle.to_degrees(), outer_cone_angle.to_degrees());
+            if let Some(f) = crate::light::spot::angles_fault(outer, inner) {
+                return Err(l.err(format!(
+                    "{where_}: cone angles inner {inner}°, outer {outer}°: {f}"
+                )));
+            }
+            if inner < outer {
+                l.note(format!(
+                    "{where_}: the spot's edge fades linearly in the angle from {inner:.1}° to \
+                     {outer:.1}° (Mitsuba's spot), not as the square of glTF's smooth step in \
+                     the cosine"
+                ));
+            }
+            let dir = world.transform_vector3(-Vec3::Z).normalize_or_zero();
+            if dir == Vec3::ZERO {
+                return Err(l.err(format!("{where_}: its node's transform has no direction")));
+            }
+            // Mitsuba's spot shines along its frame's +z.
+            let to_world =
+                Mat4::from_rotation_translation(Quat::from_rotation_arc(Vec3::Z, dir), position);
+            l.desc.lights.push(LightDesc::Spot {
+                to_world,
                 intensity: value,
+                cutoff_angle: outer,
+                beam_width: inner,
+                texture: None,
             })
         }
         Kind::Directional => {

@@ -146,13 +146,16 @@ impl Loader<'_> {
                 if matches!(mat.bsdf, Bsdf::Plastic(_) | Bsdf::RoughPlastic(_)) {
                     factor *= diffuse_scale(pbr.ior.max(1.0 + 1e-3), pbr.roughness);
                 }
-                mat.texture =
-                    self.texture(&info, false, factor, &format!("{what}.baseColorTexture"))?;
+                let w = format!("{what}.baseColorTexture");
+                mat.texture = self.texture(&info, false, (factor, Color::ZERO), &w)?;
             } else {
                 self.approximate(format!(
                     "{what}: the base colour texture does not tint transmission"
                 ));
             }
+        }
+        if let Some(n) = m.normal_texture() {
+            mat.normal_map = self.normal_texture(&n, &what)?;
         }
         let emission = self.emission(m, &what)?;
         let index = self.desc.materials.len() as u32;
@@ -267,9 +270,6 @@ impl Loader<'_> {
                 "{what}: the base colour does not tint transmission"
             ));
         }
-        if m.normal_texture().is_some() {
-            self.approximate(format!("{what}: the normal texture is ignored"));
-        }
         if m.occlusion_texture().is_some() {
             self.note(format!(
                 "{what}: the occlusion texture is ignored (a path tracer computes occlusion)"
@@ -379,26 +379,106 @@ impl Loader<'_> {
         Ok(self.bitmap(&info.texture(), raw, what)?.map(|b| b.mean()))
     }
 
-    /// A texture for a material's main colour: the image times `factor`, with the sampler's
-    /// filter and wrap mode and the KHR_texture_transform; its index in the scene's textures.
+    /// The normal texture as Mitsuba's `normalmap` reads one: linear values c, the normal
+    /// 2c − 1 in the frame (dp/du, n × dp/du, n), which is glTF's tangent space (+x along
+    /// increasing u, +y towards the image's top, i.e. decreasing v) where the tangents follow
+    /// the texture coordinates; glTF's `scale` multiplies x and y.
+    fn normal_texture(
+        &mut self,
+        n: &::gltf::material::NormalTexture,
+        what: &str,
+    ) -> Result<Option<u32>, SceneError> {
+        let s = n.scale();
+        if !(s.is_finite() && (0.0..=1.0).contains(&s.abs())) {
+            self.approximate(format!(
+                "{what}.normalTexture: scale {s} is clamped to [-1, 1]"
+            ));
+        }
+        let s = if s.is_finite() {
+            s.clamp(-1.0, 1.0)
+        } else {
+            1.0
+        };
+        // c ↦ ((2c − 1)·(s, s, 1) + 1)/2, which stays in [0, 1] for |s| ≤ 1.
+        let map = (
+            Color::new(s, s, 1.0),
+            Color::new(0.5 - 0.5 * s, 0.5 - 0.5 * s, 0.0),
+        );
+        if n.tex_coord() != 0 {
+            self.approximate(format!(
+                "{what}.normalTexture: texture coordinates TEXCOORD_{} are read as TEXCOORD_0",
+                n.tex_coord()
+            ));
+        }
+        let tex = n.texture();
+        let w = format!("{what}.normalTexture");
+        let Some(bitmap) = self.bitmap(&tex, true, &w)? else {
+            return Ok(None);
+        };
+        let bitmap = self.mapped(bitmap, map, &w)?;
+        self.push_texture(&tex, bitmap, UvTransform::IDENTITY, &w);
+        Ok(Some(self.desc.textures.len() as u32 - 1))
+    }
+
+    /// The bitmap with each pixel p mapped to p·mul + add (clamped at 0).
+    fn mapped(
+        &self,
+        bitmap: Arc<Bitmap>,
+        (mul, add): (Color, Color),
+        what: &str,
+    ) -> Result<Arc<Bitmap>, SceneError> {
+        if mul == Color::ONE && add == Color::ZERO {
+            return Ok(bitmap);
+        }
+        let px = bitmap
+            .pixels
+            .iter()
+            .map(|p| (*p * mul + add).max(Color::ZERO))
+            .collect();
+        Ok(Arc::new(
+            Bitmap::from_pixels(bitmap.width, bitmap.height, px)
+                .map_err(|e| self.err(format!("{what}: {e}")))?,
+        ))
+    }
+
+    /// A texture for a material's main colour: the image mapped by `map` (p·mul + add), with
+    /// the sampler's filter and wrap mode and the KHR_texture_transform; its index in the
+    /// scene's textures.
     fn texture(
         &mut self,
         info: &::gltf::texture::Info,
         raw: bool,
-        factor: Color,
+        map: (Color, Color),
         what: &str,
     ) -> Result<Option<u32>, SceneError> {
         let tex = info.texture();
-        let Some(mut bitmap) = self.bitmap(&tex, raw, what)? else {
+        let Some(bitmap) = self.bitmap(&tex, raw, what)? else {
             return Ok(None);
         };
-        if factor != Color::ONE {
-            let px = bitmap.pixels.iter().map(|p| *p * factor).collect();
-            bitmap = Arc::new(
-                Bitmap::from_pixels(bitmap.width, bitmap.height, px)
-                    .map_err(|e| self.err(format!("{what}: {e}")))?,
-            );
+        let bitmap = self.mapped(bitmap, map, what)?;
+        let mut set = info.tex_coord();
+        let mut to_uv = UvTransform::IDENTITY;
+        if let Some(t) = info.texture_transform() {
+            to_uv = uv_transform(t.offset(), t.rotation(), t.scale());
+            set = t.tex_coord().unwrap_or(set);
         }
+        if set != 0 {
+            self.approximate(format!(
+                "{what}: texture coordinates TEXCOORD_{set} are read as TEXCOORD_0"
+            ));
+        }
+        self.push_texture(&tex, bitmap, to_uv, what);
+        Ok(Some(self.desc.textures.len() as u32 - 1))
+    }
+
+    /// Adds a bitmap texture with the glTF texture's sampler.
+    fn push_texture(
+        &mut self,
+        tex: &::gltf::Texture,
+        bitmap: Arc<Bitmap>,
+        to_uv: UvTransform,
+        what: &str,
+    ) {
         let sampler = tex.sampler();
         let wrap = |w: ::gltf::texture::WrappingMode| match w {
             ::gltf::texture::WrappingMode::ClampToEdge => WrapMode::Clamp,
@@ -416,24 +496,12 @@ impl Loader<'_> {
             Some(::gltf::texture::MagFilter::Nearest) => FilterType::Nearest,
             _ => FilterType::Bilinear,
         };
-        let mut set = info.tex_coord();
-        let mut to_uv = UvTransform::IDENTITY;
-        if let Some(t) = info.texture_transform() {
-            to_uv = uv_transform(t.offset(), t.rotation(), t.scale());
-            set = t.tex_coord().unwrap_or(set);
-        }
-        if set != 0 {
-            self.approximate(format!(
-                "{what}: texture coordinates TEXCOORD_{set} are read as TEXCOORD_0"
-            ));
-        }
         self.desc.textures.push(Texture::Bitmap(BitmapTexture {
             bitmap,
             filter,
             wrap: wrap(sampler.wrap_s()),
             to_uv,
         }));
-        Ok(Some(self.desc.textures.len() as u32 - 1))
     }
 }
 

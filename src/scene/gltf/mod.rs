@@ -172,10 +172,16 @@ fn open(path: &Path, bytes: &[u8]) -> Result<(::gltf::Document, Option<Vec<u8>>)
         buffers::check_glb_header(bytes).map_err(|m| err(None, m))?;
     }
     let g = ::gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| match e {
-        ::gltf::Error::Deserialize(j) if !glb => err(
-            Some((j.line(), j.column())),
-            format!("invalid glTF JSON: {j}"),
-        ),
+        ::gltf::Error::Deserialize(j) if !glb => {
+            // serde_json ends its message with the place, which the error already gives.
+            let place = format!(" at line {} column {}", j.line(), j.column());
+            let msg = j.to_string();
+            let msg = msg.strip_suffix(&place).unwrap_or(&msg).to_string();
+            err(
+                Some((j.line(), j.column())),
+                format!("invalid glTF JSON: {msg}"),
+            )
+        }
         ::gltf::Error::Deserialize(j) => {
             err(None, format!("invalid JSON in the GLB's JSON chunk: {j}"))
         }

@@ -104,7 +104,7 @@ MESHES = {  # name: (geometry, material, with normals, with uvs, indexed)
     "wall": (quad(6, 3), 1, False, False, True),
     "cube": (cube(0.5), 2, True, False, True),
     "glass": (cube(0.4), 3, True, False, False),
-    "panel": (quad(1.2, 0.8), 4, False, False, True),
+    "panel": (quad(2.0, 1.2), 4, False, False, True),
 }
 TT = {"offset": [0.1, 0.2], "rotation": 0.3, "scale": [2.0, 3.0]}
 MATERIALS = [
@@ -114,11 +114,11 @@ MATERIALS = [
                                               "roughnessFactor": 0.4}},
     {"name": "gold", "pbrMetallicRoughness": {"baseColorFactor": [0.95, 0.7, 0.3, 1.0], "metallicFactor": 1.0,
                                               "roughnessFactor": 0.35}},
-    {"name": "glass", "pbrMetallicRoughness": {"metallicFactor": 0.0, "roughnessFactor": 0.15},
+    {"name": "glass", "pbrMetallicRoughness": {"metallicFactor": 0.0, "roughnessFactor": 0.45},
      "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0}, "KHR_materials_ior": {"ior": 1.5}}},
     {"name": "light", "pbrMetallicRoughness": {"baseColorFactor": [0, 0, 0, 1], "metallicFactor": 0.0,
                                                "roughnessFactor": 1.0},
-     "emissiveFactor": [1.0, 0.9, 0.8], "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 20.0}}},
+     "emissiveFactor": [1.0, 0.9, 0.8], "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 10.0}}},
 ]
 POINT_CD = 5464.0  # 8 W/sr
 NODES = [
