@@ -352,6 +352,10 @@ bad_input!(gltf_index_out_of_range_gltf, "gltf-index-out-of-range.gltf");
 bad_input!(gltf_missing_buffer_gltf, "gltf-missing-buffer.gltf");
 bad_input!(gltf_no_camera_gltf, "gltf-no-camera.gltf");
 bad_input!(gltf_no_light_gltf, "gltf-no-light.gltf");
+bad_input!(
+    gltf_position_accessor_missing_gltf,
+    "gltf-position-accessor-missing.gltf"
+);
 bad_input!(gltf_node_cycle_gltf, "gltf-node-cycle.gltf");
 bad_input!(
     gltf_roughness_above_one_gltf,

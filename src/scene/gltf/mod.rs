@@ -213,11 +213,37 @@ fn open(path: &Path, bytes: &[u8]) -> Result<(::gltf::Document, Option<Vec<u8>>)
     }
     // Checked above; the crate's own list is narrower (it knows no quantization).
     root.extensions_required.clear();
+    check_attribute_indices(&root).map_err(|m| err(None, m))?;
     let doc = ::gltf::Document::from_json(root).map_err(|e| match e {
         ::gltf::Error::Validation(v) => err(None, validation_message(&v)),
         e => err(None, format!("invalid glTF: {e}")),
     })?;
     Ok((doc, g.blob))
+}
+
+/// Refuses an attribute naming an accessor that does not exist: the crate's validation of a
+/// primitive indexes the accessors by the POSITION attribute before checking it (gltf-json
+/// 1.4.1, mesh.rs), and would panic (found by the fuzz target).
+fn check_attribute_indices(root: &::gltf::json::Root) -> Result<(), String> {
+    let n = root.accessors.len();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            for (semantic, index) in &prim.attributes {
+                if index.value() >= n {
+                    let name = match semantic {
+                        ::gltf::json::validation::Checked::Valid(s) => s.to_string(),
+                        _ => "an attribute".into(),
+                    };
+                    return Err(format!(
+                        "invalid glTF: meshes[{m}].primitives[{p}].attributes.{name} refers to \
+                         accessors[{}], which does not exist ({n} accessors)",
+                        index.value()
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The validation errors, by JSON path: the first three, and how many more.

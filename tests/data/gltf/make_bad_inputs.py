@@ -83,3 +83,7 @@ full = glb(base(), "truncated GLB file")
 write("gltf-truncated.glb", full[: len(full) - 40])
 d = base(); d["buffers"] = [{"byteLength": 44}]
 write("gltf-glb-without-bin-chunk.glb", glb(d, "the file has none"))
+# Found by the fuzz target: the gltf crate's validation indexed the accessors by POSITION.
+d = base(); d["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = 7
+write("gltf-position-accessor-missing.gltf",
+      text(d, "attributes.POSITION refers to accessors[7], which does not exist"))
