@@ -348,6 +348,7 @@ bad_input!(
     gltf_glb_without_bin_chunk_glb,
     "gltf-glb-without-bin-chunk.glb"
 );
+bad_input!(gltf_image_without_data_gltf, "gltf-image-without-data.gltf");
 bad_input!(gltf_index_out_of_range_gltf, "gltf-index-out-of-range.gltf");
 bad_input!(gltf_missing_buffer_gltf, "gltf-missing-buffer.gltf");
 bad_input!(gltf_no_camera_gltf, "gltf-no-camera.gltf");

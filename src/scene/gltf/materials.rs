@@ -348,10 +348,27 @@ impl Loader<'_> {
         if let Some(b) = self.images.get(&key) {
             return Ok(Some(b.clone()));
         }
-        let bytes = match img.source() {
-            ::gltf::image::Source::View { view, .. } => self.view_bytes(&view)?.to_vec(),
-            ::gltf::image::Source::Uri { uri, .. } => super::buffers::read_uri(self.path, uri)
+        // From the JSON: the crate's `Image::source` unwraps a missing mimeType or uri.
+        let json = &self.doc.as_json().images[img.index()];
+        let bytes = match (&json.buffer_view, &json.uri) {
+            (Some(v), _) => {
+                let view = self.doc.views().nth(v.value()).ok_or_else(|| {
+                    self.err(format!(
+                        "images[{}]: no bufferViews[{}]",
+                        img.index(),
+                        v.value()
+                    ))
+                })?;
+                self.view_bytes(&view)?.to_vec()
+            }
+            (None, Some(uri)) => super::buffers::read_uri(self.path, uri)
                 .map_err(|e| self.err(format!("images[{}]: {e}", img.index())))?,
+            (None, None) => {
+                return Err(self.err(format!(
+                    "images[{}] has neither a uri nor a bufferView",
+                    img.index()
+                )))
+            }
         };
         if bytes.starts_with(&[0xFF, 0xD8, 0xFF]) {
             self.approximate(format!(

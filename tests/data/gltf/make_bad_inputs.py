@@ -87,3 +87,7 @@ write("gltf-glb-without-bin-chunk.glb", glb(d, "the file has none"))
 d = base(); d["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = 7
 write("gltf-position-accessor-missing.gltf",
       text(d, "attributes.POSITION refers to accessors[7], which does not exist"))
+# Found by the fuzz target: the gltf crate's Image::source unwrapped a missing uri.
+d = base(); d["materials"][0]["pbrMetallicRoughness"] = {"baseColorTexture": {"index": 0}}
+d["textures"] = [{"source": 0}]; d["images"] = [{"name": "nothing"}]
+write("gltf-image-without-data.gltf", text(d, "images[0] has neither a uri nor a bufferView"))
