@@ -345,6 +345,10 @@ bad_input!(
 bad_input!(gltf_bad_json_gltf, "gltf-bad-json.gltf");
 bad_input!(gltf_bad_reference_gltf, "gltf-bad-reference.gltf");
 bad_input!(
+    gltf_glb_length_too_small_glb,
+    "gltf-glb-length-too-small.glb"
+);
+bad_input!(
     gltf_glb_without_bin_chunk_glb,
     "gltf-glb-without-bin-chunk.glb"
 );

@@ -21,6 +21,11 @@ pub fn check_glb_header(bytes: &[u8]) -> Result<(), String> {
     if version != 2 {
         return Err(format!("GLB version {version}: mcrt reads version 2"));
     }
+    if length < 20 {
+        return Err(format!(
+            "its GLB header says {length} bytes, too few for the header and a JSON chunk"
+        ));
+    }
     if length as usize > bytes.len() {
         return Err(format!(
             "truncated GLB file: its header says {length} bytes, the file has {}",
@@ -216,5 +221,8 @@ mod tests {
         assert!(check_glb_header(&long)
             .unwrap_err()
             .contains("past the end"));
+        let mut short = glb.clone();
+        short[8..12].copy_from_slice(&4u32.to_le_bytes());
+        assert!(check_glb_header(&short).unwrap_err().contains("too few"));
     }
 }

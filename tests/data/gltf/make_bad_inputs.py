@@ -91,3 +91,7 @@ write("gltf-position-accessor-missing.gltf",
 d = base(); d["materials"][0]["pbrMetallicRoughness"] = {"baseColorTexture": {"index": 0}}
 d["textures"] = [{"source": 0}]; d["images"] = [{"name": "nothing"}]
 write("gltf-image-without-data.gltf", text(d, "images[0] has neither a uri nor a bufferView"))
+# Found by the fuzz target: a GLB length below the header's 12 bytes underflowed in the crate.
+short = bytearray(glb(base(), "too few for the header and a JSON chunk"))
+short[8:12] = struct.pack("<I", 8)
+write("gltf-glb-length-too-small.glb", bytes(short))
