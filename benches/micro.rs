@@ -111,7 +111,7 @@ fn bsdfs(c: &mut Criterion) {
     let white = Vec3::splat(0.8);
     let materials = [
         ("lambert", Bsdf::Lambert(Lambert { albedo: white })),
-        ("dielectric", Bsdf::Dielectric(Dielectric { eta: 1.5 })),
+        ("dielectric", Bsdf::Dielectric(Dielectric::new(1.5))),
         (
             "roughconductor",
             Bsdf::RoughConductor(RoughConductor::new(

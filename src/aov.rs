@@ -218,7 +218,9 @@ pub fn render_guides(scene: &Scene, s: &RenderSettings) -> Result<Guides, Render
 /// previous vertex: no MIS weight).
 fn seen_emission(scene: &Scene, ray: &crate::geometry::Ray) -> Color {
     match scene.intersect(ray) {
-        Some(si) if si.light != crate::scene::NO_LIGHT => scene.lights.le(si.light, si.ng, -ray.d),
+        Some(si) if si.light != crate::scene::NO_LIGHT => {
+            scene.lights.le(si.light, si.ng, si.uv, -ray.d)
+        }
         Some(_) => Color::ZERO,
         None => scene
             .lights

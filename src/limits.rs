@@ -30,6 +30,9 @@ pub const MAX_GATHER_PHOTONS: u64 = 4096;
 pub const MAX_FINAL_GATHER: u64 = 1024;
 /// SPPM iterations.
 pub const MAX_ITERATIONS: u64 = 1 << 20;
+/// Instances of shape groups in one scene (each costs about 180 bytes: its transforms and
+/// its share of the top-level BVH).
+pub const MAX_INSTANCES: u64 = 1 << 24;
 /// Exposure in stops, either way (2^64 turns any radiance into white or black already).
 pub const MAX_EXPOSURE: f32 = 64.0;
 

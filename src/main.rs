@@ -479,6 +479,9 @@ fn render(a: RenderArgs) -> Result<i32, Error> {
     let settings = mcrt::session::settings(&a.scene, &desc.settings, &desc.cameras, &request)?;
     let scene = mcrt::session::build(&a.scene, desc)?;
     let load_time = t_load.elapsed();
+    if let Some(line) = scene.instancing_summary().filter(|_| !a.quiet) {
+        eprintln!("{line}");
+    }
 
     let (_, _, fw, fh) = settings.window();
     let npix = fw as u64 * fh as u64;

@@ -150,6 +150,13 @@ pub fn srgb_to_linear(v: f32) -> f32 {
     }
 }
 
+/// The luminance Y of a linear sRGB colour, with Mitsuba's coefficients (`luminance()` in
+/// include/mitsuba/core/spectrum.h): what a bitmap gives where a float is read.
+#[inline]
+pub fn luminance(c: Color) -> f32 {
+    c.x * 0.212_671 + c.y * 0.715_160 + c.z * 0.072_169
+}
+
 /// What is wrong with a colour value, constant or texel, by the one rule they all obey:
 /// finite and not negative, and for a reflectance (`max` = 1) at most `max` in every channel.
 /// None when it is right. The message completes "'albedo' …" or "texture values …".
@@ -179,6 +186,8 @@ pub struct Bitmap {
     mean: Color,
     /// The largest value of any channel of any pixel.
     max: f32,
+    /// Every pixel grey (a one-channel image, or grey RGB): its float value is any channel.
+    gray: bool,
 }
 
 impl Bitmap {
@@ -196,6 +205,7 @@ impl Bitmap {
         }
         let mut sum = glam::DVec3::ZERO;
         let mut max = 0f32;
+        let mut gray = true;
         for (i, p) in pixels.iter().enumerate() {
             if let Some(f) = color_fault(*p, None) {
                 let (x, y) = (i as u64 % width as u64, i as u64 / width as u64);
@@ -206,6 +216,7 @@ impl Bitmap {
             }
             sum += p.as_dvec3();
             max = max.max(p.max_element());
+            gray &= p.x == p.y && p.y == p.z;
         }
         let mean = (sum / pixels.len() as f64).as_vec3();
         Ok(Bitmap {
@@ -214,6 +225,7 @@ impl Bitmap {
             pixels,
             mean,
             max,
+            gray,
         })
     }
 
@@ -256,6 +268,17 @@ impl Bitmap {
     /// The largest value of any channel of any pixel.
     pub fn max(&self) -> f32 {
         self.max
+    }
+
+    /// A pixel's value as a float (Mitsuba's `eval_1`): the value of a grey image, else the
+    /// luminance.
+    #[inline]
+    fn float_of(&self, c: Color) -> f32 {
+        if self.gray {
+            c.x
+        } else {
+            luminance(c)
+        }
     }
 
     #[inline]
@@ -370,6 +393,12 @@ fn decode_png(bytes: &[u8], raw: bool) -> Result<Bitmap, String> {
     Bitmap::from_pixels(info.width, info.height, pixels)
 }
 
+/// The mean of a colour's channels: Mitsuba's `eval_1` and `mean()` of a constant colour.
+#[inline]
+fn channel_mean(c: Color) -> f32 {
+    (c.x + c.y + c.z) / 3.0
+}
+
 /// A bitmap and how it is looked up; the image data is shared.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BitmapTexture {
@@ -435,6 +464,43 @@ impl Texture {
                 } else {
                     *color1
                 }
+            }
+        }
+    }
+
+    /// The texture's value at `uv` where a float is read (roughness, a blend weight), as
+    /// Mitsuba's `eval_1`: a bitmap's luminance (its value, if grey), a constant's channel
+    /// mean, and for the checkerboard the float of `color0` where the cells of
+    /// [`Texture::eval`] hold `color1` and the reverse. (checkerboard.cpp's `eval_1` tests
+    /// `mask.x != mask.y` for `color0` where `eval` tests `==`; followed here so that a
+    /// checkerboard weight or roughness renders as in Mitsuba.)
+    pub fn eval_1(&self, uv: Vec2) -> f32 {
+        match self {
+            Texture::Constant(c) => channel_mean(*c),
+            Texture::Bitmap(b) => {
+                b.bitmap
+                    .float_of(b.bitmap.lookup(b.to_uv.apply(uv), b.filter, b.wrap))
+            }
+            Texture::Checkerboard {
+                color0,
+                color1,
+                to_uv,
+            } => {
+                let p = to_uv.apply(uv);
+                let m = (p - p.floor()).cmpgt(Vec2::splat(0.5));
+                channel_mean(if m.x != m.y { *color0 } else { *color1 })
+            }
+        }
+    }
+
+    /// The average of [`Texture::eval_1`] over the texture (Mitsuba's `mean()`): a bitmap's
+    /// mean luminance, a constant's channel mean, the checkerboard's two colours averaged.
+    pub fn mean_1(&self) -> f32 {
+        match self {
+            Texture::Constant(c) => channel_mean(*c),
+            Texture::Bitmap(b) => b.bitmap.float_of(b.bitmap.mean()),
+            Texture::Checkerboard { color0, color1, .. } => {
+                0.5 * (channel_mean(*color0) + channel_mean(*color1))
             }
         }
     }
@@ -700,6 +766,39 @@ mod tests {
         let t = tex(2, 1, &px, FilterType::Bilinear, WrapMode::Repeat);
         assert_eq!(t.mean(), Color::new(0.5, 1.0, 1.5));
         assert!(!t.is_constant());
+    }
+
+    /// Floats from textures (Mitsuba's `eval_1` and `mean()`): a grey bitmap's value, an RGB
+    /// one's luminance, a constant's channel mean, and the checkerboard's cells swapped.
+    #[test]
+    fn float_lookups_and_means() {
+        let px = [gray(0.25), gray(0.75)];
+        let t = tex(2, 1, &px, FilterType::Nearest, WrapMode::Clamp);
+        assert_eq!(t.eval_1(Vec2::new(0.2, 0.5)), 0.25);
+        assert_eq!(t.eval_1(Vec2::new(0.8, 0.5)), 0.75);
+        assert_eq!(t.mean_1(), 0.5);
+        let red = Color::new(1.0, 0.0, 0.0);
+        let px = [red, Color::new(0.2, 0.4, 0.6)];
+        let t = tex(2, 1, &px, FilterType::Nearest, WrapMode::Repeat);
+        assert_eq!(t.eval_1(Vec2::new(0.2, 0.5)), 0.212_671);
+        let y = 0.2 * 0.212_671 + 0.4 * 0.715_160 + 0.6 * 0.072_169;
+        assert!((t.eval_1(Vec2::new(0.8, 0.5)) - y).abs() < 1e-7);
+        assert!((t.mean_1() - 0.5 * (0.212_671 + y)).abs() < 1e-7);
+        // Bilinear: the luminance of the interpolated colour (linear, so either order).
+        let t = tex(2, 1, &px, FilterType::Bilinear, WrapMode::Clamp);
+        assert!((t.eval_1(Vec2::new(0.5, 0.5)) - 0.5 * (0.212_671 + y)).abs() < 1e-6);
+        let c = Texture::Constant(Color::new(0.1, 0.2, 0.6));
+        assert!((c.eval_1(Vec2::ZERO) - 0.3).abs() < 1e-7 && c.mean_1() == c.eval_1(Vec2::ZERO));
+        let k = Texture::Checkerboard {
+            color0: gray(0.9),
+            color1: Color::new(0.1, 0.2, 0.3),
+            to_uv: UvTransform::IDENTITY,
+        };
+        // eval gives color0 at (¼, ¼); eval_1 gives color1's mean there.
+        assert_eq!(k.eval(Vec2::splat(0.25)), gray(0.9));
+        assert!((k.eval_1(Vec2::splat(0.25)) - 0.2).abs() < 1e-7);
+        assert!((k.eval_1(Vec2::new(0.75, 0.25)) - 0.9).abs() < 1e-7);
+        assert!((k.mean_1() - 0.55).abs() < 1e-7);
     }
 
     #[test]

@@ -3,7 +3,8 @@
 //! `mcrt render` exit with status 2 and a message that names the file and says what is wrong
 //! (the fragment after `expect:` in the file's first lines; a glTF file's `asset.generator`),
 //! without a panic and without writing an output file. Meshes are rendered through a small
-//! scene that loads them (TOML for OBJ, Mitsuba XML for PLY).
+//! scene that loads them (TOML for OBJ, Mitsuba XML for PLY and serialized meshes), Radiance
+//! HDR images through an XML scene's `envmap`.
 
 mod common;
 
@@ -47,6 +48,15 @@ fn check(name: &str) {
                 input.display()
             ),
         ),
+        Some("serialized") => dir.write(
+            "scene.xml",
+            &format!(
+                "<scene version=\"3.0.0\">\n<sensor type=\"perspective\"><float name=\"fov\" \
+                 value=\"40\"/></sensor>\n<shape type=\"serialized\"><string name=\"filename\" \
+                 value=\"{}\"/></shape>\n</scene>\n",
+                input.display()
+            ),
+        ),
         Some("obj") => dir.write(
             "scene.toml",
             &format!(
@@ -55,6 +65,15 @@ fn check(name: &str) {
                  type = \"lambert\"\nalbedo = 0.5\n\n[[shape]]\ntype = \"mesh\"\n\
                  file = {:?}\nmaterial = \"m\"\n",
                 input.display().to_string()
+            ),
+        ),
+        Some("hdr") => dir.write(
+            "scene.xml",
+            &format!(
+                "<scene version=\"3.0.0\">\n<sensor type=\"perspective\"><float name=\"fov\" \
+                 value=\"40\"/></sensor>\n<emitter type=\"envmap\"><string name=\"filename\" \
+                 value=\"{}\"/></emitter>\n</scene>\n",
+                input.display()
             ),
         ),
         _ => input.clone(),
@@ -372,3 +391,249 @@ bad_input!(
     "gltf-unsupported-extension.gltf"
 );
 bad_input!(gltf_zero_yfov_gltf, "gltf-zero-yfov.gltf");
+// Issue 25: cameras (thinlens, orthographic, focal_length), cylinder, serialized meshes.
+bad_input!(
+    serialized_bad_magic_serialized,
+    "serialized-bad-magic.serialized"
+);
+bad_input!(
+    serialized_corrupt_serialized,
+    "serialized-corrupt.serialized"
+);
+bad_input!(
+    serialized_index_out_of_range_serialized,
+    "serialized-index-out-of-range.serialized"
+);
+bad_input!(
+    serialized_truncated_serialized,
+    "serialized-truncated.serialized"
+);
+bad_input!(
+    serialized_version_5_serialized,
+    "serialized-version-5.serialized"
+);
+bad_input!(xml_bad_focal_length_xml, "xml-bad-focal-length.xml");
+bad_input!(xml_cylinder_zero_radius_xml, "xml-cylinder-zero-radius.xml");
+bad_input!(xml_cylinder_same_points_xml, "xml-cylinder-same-points.xml");
+bad_input!(xml_fov_and_focal_length_xml, "xml-fov-and-focal-length.xml");
+bad_input!(
+    xml_near_clip_beyond_far_clip_xml,
+    "xml-near-clip-beyond-far-clip.xml"
+);
+bad_input!(
+    xml_orthographic_flat_to_world_xml,
+    "xml-orthographic-flat-to-world.xml"
+);
+bad_input!(
+    xml_thinlens_negative_aperture_xml,
+    "xml-thinlens-negative-aperture.xml"
+);
+bad_input!(
+    xml_thinlens_without_aperture_xml,
+    "xml-thinlens-without-aperture.xml"
+);
+bad_input!(
+    xml_thinlens_zero_focus_distance_xml,
+    "xml-thinlens-zero-focus-distance.xml"
+);
+bad_input!(
+    xml_serialized_shape_index_out_of_range_xml,
+    "xml-serialized-shape-index-out-of-range.xml"
+);
+bad_input!(
+    xml_serialized_negative_shape_index_xml,
+    "xml-serialized-negative-shape-index.xml"
+);
+bad_input!(
+    toml_thinlens_negative_aperture_toml,
+    "toml-thinlens-negative-aperture.toml"
+);
+bad_input!(
+    toml_orthographic_zero_width_toml,
+    "toml-orthographic-zero-width.toml"
+);
+bad_input!(
+    toml_cylinder_same_points_toml,
+    "toml-cylinder-same-points.toml"
+);
+// Spot and envmap emitters, and Radiance HDR (RGBE) images.
+bad_input!(hdr_truncated_hdr, "hdr-truncated.hdr");
+bad_input!(hdr_bad_orientation_hdr, "hdr-bad-orientation.hdr");
+bad_input!(hdr_run_too_long_hdr, "hdr-run-too-long.hdr");
+bad_input!(hdr_huge_size_hdr, "hdr-huge-size.hdr");
+bad_input!(hdr_xyze_format_hdr, "hdr-xyze-format.hdr");
+bad_input!(hdr_no_magic_hdr, "hdr-no-magic.hdr");
+bad_input!(hdr_header_not_ended_hdr, "hdr-header-not-ended.hdr");
+bad_input!(xml_envmap_missing_file_xml, "xml-envmap-missing-file.xml");
+bad_input!(
+    xml_envmap_negative_scale_xml,
+    "xml-envmap-negative-scale.xml"
+);
+bad_input!(
+    xml_envmap_skewed_to_world_xml,
+    "xml-envmap-skewed-to-world.xml"
+);
+bad_input!(
+    xml_spot_cutoff_out_of_range_xml,
+    "xml-spot-cutoff-out-of-range.xml"
+);
+bad_input!(
+    xml_spot_beam_wider_than_cutoff_xml,
+    "xml-spot-beam-wider-than-cutoff.xml"
+);
+bad_input!(
+    xml_spot_constant_texture_xml,
+    "xml-spot-constant-texture.xml"
+);
+bad_input!(
+    toml_envmap_negative_scale_toml,
+    "toml-envmap-negative-scale.toml"
+);
+bad_input!(
+    toml_envmap_missing_file_toml,
+    "toml-envmap-missing-file.toml"
+);
+bad_input!(
+    toml_spot_cutoff_out_of_range_toml,
+    "toml-spot-cutoff-out-of-range.toml"
+);
+bad_input!(toml_spot_up_parallel_toml, "toml-spot-up-parallel.toml");
+bad_input!(
+    toml_spot_position_and_to_world_toml,
+    "toml-spot-position-and-to-world.toml"
+);
+// Issue 25: the principled BSDFs' parameters (ranges, unknown names, eta or specular).
+bad_input!(
+    toml_principled_eta_and_specular_toml,
+    "toml-principled-eta-and-specular.toml"
+);
+bad_input!(
+    toml_principled_metallic_two_toml,
+    "toml-principled-metallic-two.toml"
+);
+bad_input!(
+    toml_principled_negative_sheen_toml,
+    "toml-principled-negative-sheen.toml"
+);
+bad_input!(
+    toml_principledthin_clearcoat_toml,
+    "toml-principledthin-clearcoat.toml"
+);
+bad_input!(
+    xml_principled_eta_and_specular_xml,
+    "xml-principled-eta-and-specular.xml"
+);
+bad_input!(
+    xml_principled_metallic_two_xml,
+    "xml-principled-metallic-two.xml"
+);
+bad_input!(
+    xml_principled_negative_eta_xml,
+    "xml-principled-negative-eta.xml"
+);
+bad_input!(
+    xml_principled_negative_roughness_xml,
+    "xml-principled-negative-roughness.xml"
+);
+bad_input!(
+    xml_principled_sampling_rate_negative_xml,
+    "xml-principled-sampling-rate-negative.xml"
+);
+bad_input!(
+    xml_principled_unknown_parameter_xml,
+    "xml-principled-unknown-parameter.xml"
+);
+bad_input!(
+    xml_principledthin_diff_trans_three_xml,
+    "xml-principledthin-diff-trans-three.xml"
+);
+bad_input!(
+    xml_principledthin_metallic_xml,
+    "xml-principledthin-metallic.xml"
+);
+bad_input!(xml_texture_on_ior_xml, "xml-texture-on-ior.xml");
+bad_input!(
+    xml_texture_roughplastic_alpha_xml,
+    "xml-texture-roughplastic-alpha.xml"
+);
+bad_input!(
+    xml_blend_weight_above_one_xml,
+    "xml-blend-weight-above-one.xml"
+);
+bad_input!(xml_blend_one_child_xml, "xml-blend-one-child.xml");
+bad_input!(xml_blend_without_weight_xml, "xml-blend-without-weight.xml");
+bad_input!(
+    xml_blend_nested_too_deep_xml,
+    "xml-blend-nested-too-deep.xml"
+);
+bad_input!(
+    xml_blend_contains_itself_xml,
+    "xml-blend-contains-itself.xml"
+);
+bad_input!(xml_unknown_wrap_mode_xml, "xml-unknown-wrap-mode.xml");
+bad_input!(xml_unknown_filter_type_xml, "xml-unknown-filter-type.xml");
+bad_input!(
+    toml_blend_weight_below_zero_toml,
+    "toml-blend-weight-below-zero.toml"
+);
+bad_input!(
+    toml_blend_contains_itself_toml,
+    "toml-blend-contains-itself.toml"
+);
+bad_input!(
+    toml_blend_three_materials_toml,
+    "toml-blend-three-materials.toml"
+);
+bad_input!(
+    toml_texture_roughplastic_alpha_toml,
+    "toml-texture-roughplastic-alpha.toml"
+);
+bad_input!(
+    toml_unknown_roughness_texture_toml,
+    "toml-unknown-roughness-texture.toml"
+);
+bad_input!(
+    xml_instance_projective_to_world_xml,
+    "xml-instance-projective-to-world.xml"
+);
+bad_input!(
+    xml_instance_ref_not_shapegroup_xml,
+    "xml-instance-ref-not-shapegroup.xml"
+);
+bad_input!(
+    xml_instance_ref_to_plain_shape_xml,
+    "xml-instance-ref-to-plain-shape.xml"
+);
+bad_input!(
+    xml_instance_singular_to_world_xml,
+    "xml-instance-singular-to-world.xml"
+);
+bad_input!(
+    xml_instance_two_shapegroups_xml,
+    "xml-instance-two-shapegroups.xml"
+);
+bad_input!(xml_instance_unknown_id_xml, "xml-instance-unknown-id.xml");
+bad_input!(
+    xml_instance_without_shapegroup_xml,
+    "xml-instance-without-shapegroup.xml"
+);
+bad_input!(
+    xml_shapegroup_bsdf_child_xml,
+    "xml-shapegroup-bsdf-child.xml"
+);
+bad_input!(xml_shapegroup_emitter_xml, "xml-shapegroup-emitter.xml");
+bad_input!(xml_shapegroup_nested_xml, "xml-shapegroup-nested.xml");
+bad_input!(
+    xml_shapegroup_with_instance_xml,
+    "xml-shapegroup-with-instance.xml"
+);
+bad_input!(toml_group_emission_toml, "toml-group-emission.toml");
+bad_input!(
+    toml_instance_matrix_and_scale_toml,
+    "toml-instance-matrix-and-scale.toml"
+);
+bad_input!(toml_instance_singular_toml, "toml-instance-singular.toml");
+bad_input!(
+    toml_instance_unknown_group_toml,
+    "toml-instance-unknown-group.toml"
+);

@@ -423,7 +423,7 @@ fn one_and_two_sided_materials() {
         }
     }
     // Dielectrics have two sides by nature and ignore the flag.
-    let glass = Material::new(Bsdf::Dielectric(Dielectric { eta: 1.5 }), false);
+    let glass = Material::new(Bsdf::Dielectric(Dielectric::new(1.5)), false);
     assert!(glass
         .sample(
             dir(180.0 - 20.0, 0.0),
@@ -525,7 +525,7 @@ fn dielectric_sampling() {
     const N: usize = 40_000;
     let mut rng = Rng::new(13);
     for eta in [1.5f32, 1.0 / 1.5] {
-        let m = Material::new(Bsdf::Dielectric(Dielectric { eta }), false);
+        let m = Material::new(Bsdf::Dielectric(Dielectric::new(eta)), false);
         for side in [1.0f32, -1.0] {
             for theta in [0.0f64, 20.0, 40.0, 45.0, 60.0, 80.0, 89.0] {
                 let mut wo = dir(theta, 0.3 + theta / 10.0);
@@ -602,7 +602,7 @@ fn dielectric_sampling() {
 #[test]
 fn dielectric_eval_and_pdf_are_zero() {
     let mut rng = Rng::new(14);
-    let m = Material::new(Bsdf::Dielectric(Dielectric { eta: 1.5 }), true);
+    let m = Material::new(Bsdf::Dielectric(Dielectric::new(1.5)), true);
     assert!(m.is_specular());
     for _ in 0..1000 {
         let (wo, wi) = (rng.sphere(), rng.sphere());

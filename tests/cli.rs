@@ -246,9 +246,12 @@ fn plastic_specular_above_one() {
 fn unknown_light_type() {
     bad_scene(
         "light-type",
-        "[[light]]\ntype = \"spot\"\nposition = [0, 1, 0]\n",
-        loc("type = \"spot\"", "\"spot\""),
-        &["unknown light type 'spot'", "point, directional, constant"],
+        "[[light]]\ntype = \"projector\"\nposition = [0, 1, 0]\n",
+        loc("type = \"projector\"", "\"projector\""),
+        &[
+            "unknown light type 'projector'",
+            "point, directional, spot, constant",
+        ],
     );
 }
 

@@ -301,7 +301,7 @@ fn chi2_rough_dielectric() {
             // 128).
             for theta in [25.0, 60.0] {
                 let m = rough_dielectric(kind, au, av, eta);
-                cases.push((m, dir(theta, 0.5)));
+                cases.push((m.clone(), dir(theta, 0.5)));
                 cases.push((m, flip(dir(theta + 15.0, 2.0))));
             }
         }
@@ -720,7 +720,7 @@ fn sides_and_specularity() {
     ];
     let mut rng = Rng::new(6);
     for m in &one_sided {
-        let mut two = *m;
+        let mut two = m.clone();
         two.two_sided = true;
         for _ in 0..2000 {
             let wo = flip(Vec3A::new(0.3, 0.2, 0.5).normalize());
@@ -751,5 +751,6 @@ fn sides_and_specularity() {
     assert!(!rough_dielectric(Beckmann, 0.3, 0.3, 1.5).is_specular());
     assert!(one_sided[0].is_specular());
     eprintln!("size_of::<Bsdf>() = {}", std::mem::size_of::<Bsdf>());
-    assert!(std::mem::size_of::<Bsdf>() <= 64);
+    // The principled BSDF: fourteen parameters and three sampling rates, 68 bytes, and the tag.
+    assert!(std::mem::size_of::<Bsdf>() <= 72);
 }

@@ -14,7 +14,8 @@ fn scaled(mut d: SceneDesc, s: f32) -> SceneDesc {
     for shape in &mut d.shapes {
         match &mut shape.geometry {
             GeometryDesc::Mesh(m) => m.transform(&Mat4::from_scale(Vec3::splat(s))),
-            GeometryDesc::Sphere { center, radius } => {
+            GeometryDesc::Sphere { center, radius }
+            | GeometryDesc::OrientedSphere { center, radius, .. } => {
                 *center *= s;
                 *radius *= s;
             }
@@ -40,6 +41,28 @@ fn scaled(mut d: SceneDesc, s: f32) -> SceneDesc {
             CameraDesc::Perspective { origin, target, .. } => {
                 *origin *= s;
                 *target *= s;
+            }
+            CameraDesc::ThinLens {
+                origin,
+                target,
+                aperture_radius,
+                focus_distance,
+                ..
+            } => {
+                *origin *= s;
+                *target *= s;
+                *aperture_radius *= s;
+                *focus_distance *= s;
+            }
+            CameraDesc::Orthographic {
+                center,
+                half_x,
+                half_y,
+                ..
+            } => {
+                *center *= s;
+                *half_x *= s;
+                *half_y *= s;
             }
         }
     }

@@ -40,6 +40,13 @@ fn toml_textures_obj_and_ply_match_mitsuba() {
     twin_matches_mitsuba("textures", 256, 4096);
 }
 
+/// Textured roughness and plastic reflectances, blends (checkerboard and nested) and
+/// textured area lights, written in the native format.
+#[test]
+fn toml_textured_parameters_and_blends_match_mitsuba() {
+    twin_matches_mitsuba("textured-params", 256, 4096);
+}
+
 fn area(m: &TriangleMesh) -> f32 {
     m.indices
         .iter()
@@ -137,9 +144,15 @@ fn twin_matches_xml(name: &str) {
             if !format!("{:?}", ma.bsdf).contains("Dielectric") {
                 assert_eq!(ma.two_sided, mb.two_sided, "{name}: shape {i} sides");
             }
+            let textures = |m: &mcrt::material::Material, d: &mcrt::scene::SceneDesc| {
+                m.slots
+                    .iter()
+                    .map(|b| d.textures[b.texture as usize].clone())
+                    .collect::<Vec<_>>()
+            };
             assert_eq!(
-                ma.texture.map(|k| &x.textures[k as usize]),
-                mb.texture.map(|k| &t.textures[k as usize]),
+                textures(ma, &x),
+                textures(mb, &t),
                 "{name}: shape {i} texture"
             );
         }
@@ -292,7 +305,7 @@ fn toml_defaults_of_the_new_materials_and_lights() {
     assert!(d
         .materials
         .iter()
-        .all(|m| m.two_sided && m.texture.is_none()));
+        .all(|m| m.two_sided && m.slots.is_empty()));
     assert_eq!(
         format!("{:?}", d.lights),
         "[Constant { radiance: Vec3(0.5, 0.5, 0.5) }]"
@@ -333,4 +346,28 @@ fn toml_microfacet_distribution() {
             (Ggx, 0.1, 0.1),
         ]
     );
+}
+
+/// Spot lights by position, direction and up, and by a to_world matrix with a projected
+/// texture: the Mitsuba reference of spot.xml.
+#[test]
+fn toml_spot_lights_match_mitsuba() {
+    twin_matches_mitsuba("spot", 256, 4096);
+}
+
+/// An envmap light (Radiance HDR, scale, a to_world rotation): the Mitsuba reference of
+/// envmap.xml.
+#[test]
+fn toml_envmap_light_matches_mitsuba() {
+    twin_matches_mitsuba("envmap", 256, 4096);
+}
+
+#[test]
+fn toml_principled_twin_describes_the_xml_scene() {
+    twin_matches_xml("principled");
+}
+
+#[test]
+fn toml_principled_matches_mitsuba() {
+    twin_matches_mitsuba("principled", 512, 4096);
 }

@@ -122,17 +122,17 @@ fn wrong_property_type_is_an_error() {
 fn unknown_shape_and_emitter() {
     bad_xml(
         "xml-shape",
-        r#"<shape type="serialized"/>"#,
-        "serialized",
-        "serialized",
-        &["shape 'serialized' is not supported", "ply"],
+        r#"<shape type="sdfgrid"/>"#,
+        "sdfgrid",
+        "sdfgrid",
+        &["shape 'sdfgrid' is not supported", "ply"],
     );
     bad_xml(
         "xml-emitter",
-        r#"<emitter type="envmap"/>"#,
-        "envmap",
-        "envmap",
-        &["emitter 'envmap' is not supported", "constant"],
+        r#"<emitter type="projector"/>"#,
+        "projector",
+        "projector",
+        &["emitter 'projector' is not supported", "spot and envmap"],
     );
 }
 

@@ -4,7 +4,12 @@
 # scalar_rgb (40 s), which needs no LLVM.
 set -e
 cd "$(dirname "$0")/.."
+for s in lights materials textures cameras orthographic shapes; do
+for s in lights materials textures principled; do
+for s in lights materials textures textured-params; do
+for s in lights materials textures instances; do
 for s in lights materials textures maps-mask; do
+for s in lights materials textures maps-mask spot envmap envmap-direct; do
     python3 tools/mitsuba_ref.py tests/data/mitsuba/features/$s.xml tests/data/refs/$s.exr 4096 --pass-spp 512
 done
 python3 tools/mitsuba_ref.py tests/data/mitsuba/features/beckmann.xml tests/data/refs/beckmann.exr 4096 --pass-spp 512 --variant scalar_rgb

@@ -10,6 +10,22 @@ pub struct Sphere {
     pub radius: f32,
 }
 
+/// Texture coordinates of the point of a sphere with unit normal `n`: (φ/2π, θ/π), φ the
+/// azimuth from +x in [0, 2π), θ the angle from +z (Mitsuba's sphere).
+#[inline]
+pub fn uv_of_normal(n: Vec3A) -> glam::Vec2 {
+    let phi = n.y.atan2(n.x);
+    let phi = if phi < 0.0 {
+        phi + std::f32::consts::TAU
+    } else {
+        phi
+    };
+    glam::Vec2::new(
+        phi / std::f32::consts::TAU,
+        n.z.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
+    )
+}
+
 impl Sphere {
     /// Nearest t in (0, t_max). The discriminant is computed as r² − |f − (f·d̂)d̂|², with
     /// f = o − c, which loses no precision when the ray starts far from a small sphere

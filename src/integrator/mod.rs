@@ -369,7 +369,7 @@ pub(crate) fn emitted(
     if si.light == crate::scene::NO_LIGHT {
         return Color::ZERO;
     }
-    let le = scene.lights.le(si.light, si.ng, -d);
+    let le = scene.lights.le(si.light, si.ng, si.uv, -d);
     match prev {
         None => le,
         Some((p_prev, bsdf_pdf)) => {

@@ -84,7 +84,8 @@ pub(crate) fn sample_lights(
             // variant, without the arrays the others need); the others are evaluated sample
             // by sample.
             let planar = match &material.bsdf {
-                Bsdf::Lambert(_) => match material.orient(wo) {
+                // (A normal or bump map's factor varies with the light's direction.)
+                Bsdf::Lambert(_) if material.perturbed.is_none() => match material.orient(wo) {
                     Some(_) => planar::planar::<true>,
                     None => return Color::ZERO, // a one-sided surface seen from behind
                 },

@@ -144,22 +144,26 @@ pub(crate) fn direct_light(
 }
 
 /// Follows a ray through mirrors and glass to the first non-specular surface; returns it,
-/// its material, the throughput and the segments traced.
+/// its material, the throughput and the segments traced. `on_hit` sees every surface hit,
+/// and None where the ray leaves the scene.
 fn follow_specular(
     scene: &Scene,
     mut ray: Ray,
     sampler: &mut Sampler,
     stats: &mut RayStats,
     max_segments: u32,
-    mut on_hit: impl FnMut(&Interaction, &Ray, Color),
+    mut on_hit: impl FnMut(Option<&Interaction>, &Ray, Color),
 ) -> Option<(Interaction, Material, Ray, Color, u32)> {
     let mut beta = Color::ONE;
     let mut segs = 0u32;
     loop {
         stats.rays += 1;
         segs += 1;
-        let si = scene.intersect(&ray)?;
-        on_hit(&si, &ray, beta);
+        let Some(si) = scene.intersect(&ray) else {
+            on_hit(None, &ray, beta);
+            return None;
+        };
+        on_hit(Some(&si), &ray, beta);
         let material = scene.material_at(&si);
         if material.is_black() {
             return None;
@@ -201,16 +205,18 @@ pub fn li(
     // Emission seen directly or through mirrors and glass.
     let hidden_first = p.hide_emitters;
     let mut first = true;
+    // (and the environment, where the ray leaves the scene, also after mirrors and glass).
     let hit = follow_specular(scene, ray, sampler, stats, max_depth, |si, r, beta| {
         if !(first && hidden_first) {
-            l += beta * super::emitted(scene, si, r.d, None, p.shadow_rays);
+            l += beta
+                * match si {
+                    Some(si) => super::emitted(scene, si, r.d, None, p.shadow_rays),
+                    None => super::escaped(scene, r.d, None, p.shadow_rays),
+                };
         }
         first = false;
     });
     let Some((si, material, ray, beta, s)) = hit else {
-        if first && !hidden_first {
-            l += super::escaped(scene, ray.d, None, p.shadow_rays);
-        }
         return l;
     };
     if s >= max_depth {

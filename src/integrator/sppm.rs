@@ -28,7 +28,7 @@ use std::time::Instant;
 const ALPHA: f32 = 2.0 / 3.0;
 const MAX_SPECULAR_CHAIN: u32 = 32;
 
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct VisiblePoint {
     si: Interaction,
     material: Material,
@@ -39,7 +39,7 @@ struct VisiblePoint {
     max_photon_depth: u32,
 }
 
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct PixelState {
     r2: f32,
     n: f32,

@@ -65,17 +65,16 @@ impl Distribution1D {
     /// A point x in [0, 1) with density `pmf[i] · n` on bin i = ⌊x·n⌋ (the bin's share of
     /// the unit interval); None when the distribution is empty.
     #[inline]
-    pub fn sample_continuous(&self, u: f32) -> Option<(f32, f32)> {
+    pub fn sample_continuous(&self, u: f32) -> Option<(f32, f32, usize)> {
         let (i, p) = self.sample_discrete(u)?;
-        let n = self.pmf.len() as f32;
+        let n = self.pmf.len();
         // Where u falls within the bin's share of the cdf, remapped to [0, 1).
         let du = if p > 0.0 {
             ((u - self.cdf[i]) / p).clamp(0.0, 1.0)
         } else {
             0.5
         };
-        let x = ((i as f32 + du) / n).min(ONE_MINUS_EPSILON);
-        Some((x, p * n))
+        Some((in_bin(i, du, n), p * n as f32, i))
     }
 
     /// The density of `sample_continuous` at x in [0, 1].
@@ -90,8 +89,23 @@ impl Distribution1D {
     }
 }
 
-/// The largest f32 below 1.
-const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+/// (i + du)/n, nudged by an ulp where rounding would put it in a neighbouring bin (as the
+/// densities look it up: ⌊x·n⌋ = i), so that a sample's density is the one `pdf` gives there.
+#[inline]
+fn in_bin(i: usize, du: f32, n: usize) -> f32 {
+    let mut x = (i as f32 + du) / n as f32;
+    for _ in 0..4 {
+        let b = (x * n as f32) as usize;
+        if b > i || x >= 1.0 {
+            x = f32::from_bits(x.to_bits() - 1);
+        } else if b < i {
+            x = f32::from_bits(x.to_bits() + 1);
+        } else {
+            break;
+        }
+    }
+    x
+}
 
 /// A piecewise-constant density on [0, 1)², constant on each of `nu × nv` cells.
 #[derive(Clone, Debug, Default)]
@@ -128,9 +142,8 @@ impl Distribution2D {
     /// A point of [0, 1)² and its density; None when the distribution is empty.
     #[inline]
     pub fn sample(&self, u: glam::Vec2) -> Option<(glam::Vec2, f32)> {
-        let (y, py) = self.marginal.sample_continuous(u.y)?;
-        let row = ((y * self.conditional.len() as f32) as usize).min(self.conditional.len() - 1);
-        let (x, px) = self.conditional[row].sample_continuous(u.x)?;
+        let (y, py, row) = self.marginal.sample_continuous(u.y)?;
+        let (x, px, _) = self.conditional[row].sample_continuous(u.x)?;
         Some((glam::Vec2::new(x, y), px * py))
     }
 
@@ -160,9 +173,10 @@ mod tests {
         let mut counts = [0u32; 4];
         for k in 0..n {
             let u = (k as f32 + 0.5) / n as f32;
-            let (x, pdf) = d.sample_continuous(u).unwrap();
+            let (x, pdf, i) = d.sample_continuous(u).unwrap();
             assert!((0.0..1.0).contains(&x));
             let bin = (x * 4.0) as usize;
+            assert_eq!(bin, i);
             counts[bin] += 1;
             assert_eq!(pdf, d.pdf_continuous(x));
         }
@@ -202,6 +216,10 @@ mod tests {
         }
         let empty = Distribution2D::new(&[0.0; 6], 3, 2);
         assert!(empty.is_empty() && empty.sample(Vec2::splat(0.5)).is_none());
+        // At a bin's very edge the sample stays in its bin (x = 0.4 would be row 2 of 5).
+        let d = Distribution2D::new(&[1.0, 0.0, 1.0, 0.0, 1.0], 1, 5);
+        let (p, pdf) = d.sample(Vec2::new(0.5, 2.0 / 3.0 - 1e-8)).unwrap();
+        assert_eq!(pdf, d.pdf(p), "{p}");
         assert_eq!(empty.pdf(Vec2::splat(0.5)), 0.0);
     }
 }

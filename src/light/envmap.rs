@@ -16,10 +16,9 @@
 //! # Sampling
 //!
 //! The bilinear cells (W across, H − 1 down) get a piecewise-constant density in (u, v)
-//! proportional to their mean corner luminance times the mean of sin θ over the cell
-//! (pbrt-v4's `ImageInfiniteLight`; Mitsuba samples the same product with a bilinear
-//! warp): a cell is chosen where it sends much light, and never where it sends none (its
-//! four corners black). A point uniform in the cell maps to a direction, and the density
+//! proportional to the integral of luminance times sin θ over the cell (pbrt-v4's
+//! `ImageInfiniteLight`; Mitsuba samples the same product with a bilinear warp): a cell is
+//! chosen where it sends much light, and never where it sends none (its four corners black). A point uniform in the cell maps to a direction, and the density
 //! converts to solid angle by dω = 2π² sin θ du dv (pbrt-v4 eq. 12.7 with Mitsuba's ranges).
 
 use super::distribution::Distribution2D;
@@ -28,11 +27,7 @@ use crate::Color;
 use glam::{Mat3, Mat3A, Vec2, Vec3A};
 use std::f32::consts::PI;
 
-/// Mitsuba's `luminance` (Rec. 709 / sRGB primaries).
-#[inline]
-fn luminance(c: Color) -> f32 {
-    0.212_671 * c.x + 0.715_160 * c.y + 0.072_169 * c.z
-}
+use crate::texture::luminance;
 
 /// An environment map, ready to evaluate and sample.
 #[derive(Clone, Debug)]
@@ -59,7 +54,7 @@ pub fn fault(width: u32, height: u32, to_world: Mat3) -> Option<String> {
     }
     let s = to_world.determinant().abs().cbrt();
     let r = to_world * (1.0 / s);
-    if !(s.is_finite() && s > 0.0) || !(r.transpose() * r).abs_diff_eq(Mat3::IDENTITY, 1e-4) {
+    if !(s.is_finite() && s > 0.0 && (r.transpose() * r).abs_diff_eq(Mat3::IDENTITY, 1e-4)) {
         return Some(
             "an environment map's to_world must be a rotation (a uniform scale is ignored)".into(),
         );
@@ -87,14 +82,20 @@ impl EnvMap {
         let mut total = glam::DVec3::ZERO;
         let dtheta = PI / ch as f32;
         for y in 0..ch {
-            // ∫ sin θ dθ over the row, and its mean.
-            let band = (y as f32 * dtheta).cos() - ((y + 1) as f32 * dtheta).cos();
-            let sin_mean = band / dtheta;
+            // The radiance is linear in θ between a cell's rows, L = L0 (1 − t) + L1 t with
+            // t = (θ − θ0)/Δθ: ∫ L sin θ dθ = L0 a0 + L1 a1, with a1 = ∫ t sin θ dθ =
+            // (sin θ1 − sin θ0)/Δθ − cos θ1 and a0 + a1 = cos θ0 − cos θ1.
+            let (t0, t1) = (y as f32 * dtheta, (y + 1) as f32 * dtheta);
+            let a1 = ((t1.sin() - t0.sin()) / dtheta - t1.cos()).max(0.0);
+            let a0 = (t0.cos() - t1.cos() - a1).max(0.0);
             for x in 0..cw {
-                let c = 0.25 * (px(x, y) + px(x + 1, y) + px(x, y + 1) + px(x + 1, y + 1));
-                weights[y * cw + x] = luminance(c) * sin_mean;
-                // Solid angle of the cell: 2π/W · band.
-                total += (c * (band * 2.0 * PI / cw as f32)).as_dvec3();
+                // Across, the mean of the two columns is exact.
+                let top = 0.5 * (px(x, y) + px(x + 1, y));
+                let bottom = 0.5 * (px(x, y + 1) + px(x + 1, y + 1));
+                let integral = top * a0 + bottom * a1;
+                weights[y * cw + x] = luminance(integral);
+                // Times the cell's width in φ.
+                total += (integral * (2.0 * PI / cw as f32)).as_dvec3();
             }
         }
         EnvMap {

@@ -4,12 +4,18 @@
 //! radiance leaving the front (the side the geometric normal points to). Next-event estimation
 //! picks one light in proportion to its power, then a point uniformly on its area, and converts
 //! the area density to solid angle: p_ω = p_A · d² / |cos θ_light| (Veach 1997, eq. 8.10).
+//!
+//! An area light's radiance may be a texture (Mitsuba's `area` emitter with a textured
+//! `radiance`): evaluated at the texture coordinates of the point, sampled or hit, with the
+//! light's point still chosen uniformly over its area (as Mitsuba's `area` does) and its
+//! power, for choosing among lights, taken from the texture's mean.
 
 pub mod distribution;
 pub mod envmap;
 pub mod spot;
 
 use crate::geometry::{ray::gamma, Sphere, Triangle};
+use crate::texture::Texture;
 use crate::Color;
 use distribution::Distribution1D;
 use glam::{Vec2, Vec3A};
@@ -31,8 +37,13 @@ pub enum LightShape {
 #[derive(Clone, Copy, Debug)]
 pub struct AreaLight {
     pub shape: LightShape,
+    /// The radiance; with a texture, the texture's mean.
     pub radiance: Color,
     pub area: f32,
+    /// The texture giving the radiance (an index into [`Lights::textures`]), or
+    /// [`NO_TEXTURE`]; and for a triangle its vertices' texture coordinates.
+    pub texture: u32,
+    pub uvs: [Vec2; 3],
     /// Planar shapes: the unit normal of the emitting side, and a bound on the floating-point
     /// error of any sampled point, both computed once here rather than per shadow ray.
     normal: Vec3A,
@@ -64,8 +75,40 @@ impl AreaLight {
             shape,
             radiance,
             area,
+            texture: NO_TEXTURE,
+            uvs: [Vec2::ZERO, Vec2::X, Vec2::Y],
             normal,
             err,
+        }
+    }
+
+    /// This sphere light emitting towards its centre (Mitsuba's `flip_normals`): its sampled
+    /// points get inward normals. (Spheres keep +z in `normal` as the sign of theirs.)
+    pub fn inward(mut self) -> Self {
+        debug_assert!(matches!(self.shape, LightShape::Sphere(_)));
+        self.normal = -self.normal;
+        self
+    }
+
+    /// This light with its radiance given by texture `texture` (whose mean `radiance`
+    /// already is); `uvs` are a triangle's vertex texture coordinates.
+    pub fn with_texture(mut self, texture: u32, uvs: [Vec2; 3]) -> Self {
+        self.texture = texture;
+        self.uvs = uvs;
+        self
+    }
+
+    /// The texture coordinates of the point `sample_point(u)` (normal `n`): a triangle's
+    /// interpolated vertex uvs, a sphere's (φ/2π, θ/π) (as at a hit on it).
+    fn uv_of_sample(&self, u: Vec2, n: Vec3A) -> Vec2 {
+        match &self.shape {
+            LightShape::Triangle(_) => {
+                let (bu, bv) = Triangle::sample_uniform(u);
+                self.uvs[0] * (1.0 - bu - bv) + self.uvs[1] * bu + self.uvs[2] * bv
+            }
+            // (Lights with textures are not merged into parallelograms.)
+            LightShape::Parallelogram { .. } => u,
+            LightShape::Sphere(_) => crate::geometry::sphere::uv_of_normal(n),
         }
     }
 
@@ -128,11 +171,15 @@ impl AreaLight {
                 let n = crate::material::sampling::square_to_uniform_sphere(u);
                 let p = s.center + n * s.radius;
                 let err = (s.center.abs() + (n * s.radius).abs()) * gamma(5);
-                (p, n, err)
+                // `normal.z` is −1 for a sphere that emits inwards ([`AreaLight::inward`]).
+                (p, n * self.normal.z, err)
             }
         }
     }
 }
+
+/// `AreaLight::texture` of a light with constant radiance.
+pub const NO_TEXTURE: u32 = u32::MAX;
 
 /// A light that is not a surface: a point, a direction, or the environment.
 #[derive(Clone, Debug)]
@@ -152,7 +199,7 @@ pub enum OtherLight {
 impl OtherLight {
     /// Power, for choosing among lights; `radius` bounds the scene (pbrt-v4's convention
     /// for lights at infinity: the power that crosses a disk of that radius).
-    fn power(&self, radius: f32) -> f32 {
+    pub fn power(&self, radius: f32) -> f32 {
         let mean = |c: Color| (c.x + c.y + c.z) / 3.0;
         let disk = std::f32::consts::PI * radius * radius;
         match self {
@@ -251,6 +298,8 @@ pub struct Lights {
     envs: Vec<usize>,
     /// The only light, if there is one and it is planar.
     planar: Option<PlanarLight>,
+    /// The textures of area lights' radiance (`AreaLight::texture`).
+    pub textures: Vec<Texture>,
 }
 
 impl Lights {
@@ -271,7 +320,7 @@ impl Lights {
             .collect();
         let distribution = Distribution1D::new(&powers);
         let planar = match (&lights[..], others.len(), distribution.len()) {
-            ([l], 0, 1) => PlanarLight::new(l),
+            ([l], 0, 1) if l.texture == NO_TEXTURE => PlanarLight::new(l),
             _ => None,
         };
         Lights {
@@ -280,7 +329,31 @@ impl Lights {
             others,
             envs,
             planar,
+            textures: Vec::new(),
         }
+    }
+
+    /// These lights with `textures` for the radiance of those that have one.
+    pub fn with_textures(mut self, textures: Vec<Texture>) -> Self {
+        self.textures = textures;
+        self
+    }
+
+    /// The radiance of area light `light` at texture coordinates `uv`.
+    #[inline]
+    fn radiance_at(&self, light: &AreaLight, uv: impl FnOnce() -> Vec2) -> Color {
+        if light.texture == NO_TEXTURE {
+            light.radiance
+        } else {
+            self.textures[light.texture as usize].eval(uv())
+        }
+    }
+
+    /// The radiance of area light `id` at its point `sample_point(u)`, of normal `n`.
+    #[inline]
+    pub fn radiance_of_sample(&self, id: usize, u: Vec2, n: Vec3A) -> Color {
+        let light = &self.lights[id];
+        self.radiance_at(light, || light.uv_of_sample(u, n))
     }
 
     /// The scene's only light, if it is a triangle or a parallelogram (chosen with
@@ -300,11 +373,12 @@ impl Lights {
         self.distribution.pmf(id)
     }
 
-    /// Radiance leaving light `id` at a point with normal `n` in direction `w` (unit).
+    /// Radiance leaving light `id` at a point with normal `n` and texture coordinates `uv`
+    /// in direction `w` (unit).
     #[inline]
-    pub fn le(&self, id: u32, n: Vec3A, w: Vec3A) -> Color {
+    pub fn le(&self, id: u32, n: Vec3A, uv: Vec2, w: Vec3A) -> Color {
         if n.dot(w) > 0.0 {
-            self.lights[id as usize].radiance
+            self.radiance_at(&self.lights[id as usize], || uv)
         } else {
             Color::ZERO
         }
@@ -353,7 +427,7 @@ impl Lights {
             n,
             p_err,
             wi,
-            le: light.radiance,
+            le: self.radiance_at(light, || light.uv_of_sample(u, n)),
             pdf,
             delta: false,
             infinite: false,

@@ -54,8 +54,8 @@ pub fn angles_fault(cutoff_deg: f32, beam_deg: f32) -> Option<String> {
 /// must be invertible.
 pub fn frame_fault(to_world: glam::Mat3) -> Option<String> {
     let det = to_world.determinant();
-    (!(det.is_finite() && det != 0.0) || !to_world.inverse().is_finite())
-        .then(|| "the spot light's to_world transform is singular".to_string())
+    let ok = det.is_finite() && det != 0.0 && to_world.inverse().is_finite();
+    (!ok).then(|| "the spot light's to_world transform is singular".to_string())
 }
 
 impl SpotLight {
@@ -134,6 +134,11 @@ impl SpotLight {
     /// The world direction of the light's axis (unit).
     pub fn axis(&self) -> Vec3A {
         (self.to_world * Vec3A::Z).normalize()
+    }
+
+    /// cos(cutoff_angle): no light leaves further off the axis (for a rotation frame).
+    pub fn cos_cutoff(&self) -> f32 {
+        self.cos_cutoff
     }
 }
 

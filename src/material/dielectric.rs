@@ -1,6 +1,7 @@
 //! Smooth dielectric interface (glass): exact Fresnel reflectance, refraction by Snell's law,
 //! total internal reflection. Reflection or refraction is chosen with probability F and 1 − F,
-//! so the sample weight is 1 (times the radiance scaling of refraction).
+//! so the sample weight is 1 (times the radiance scaling of refraction), times Mitsuba's
+//! `specular_reflectance` or `specular_transmittance` factor (1 for physical realism).
 
 use super::mirror::reflect_local;
 use super::{BsdfSample, TransportMode};
@@ -11,6 +12,9 @@ use glam::Vec3A;
 pub struct Dielectric {
     /// Relative index of refraction: inside over outside (the side the normal points to).
     pub eta: f32,
+    /// Factors on the reflected and the refracted light.
+    pub specular_reflectance: Color,
+    pub specular_transmittance: Color,
 }
 
 /// Unpolarised Fresnel reflectance of a dielectric interface (pbrt-v4 §9.3.5,
@@ -72,13 +76,22 @@ pub fn refract_local(wi: Vec3A, eta: f32) -> Option<(Vec3A, f32)> {
 }
 
 impl Dielectric {
+    /// Glass of relative index `eta` with factors of 1.
+    pub fn new(eta: f32) -> Self {
+        Dielectric {
+            eta,
+            specular_reflectance: Color::ONE,
+            specular_transmittance: Color::ONE,
+        }
+    }
+
     #[inline]
     pub fn sample(&self, wo: Vec3A, u: f32, mode: TransportMode) -> Option<BsdfSample> {
         let f = fresnel_dielectric(wo.z, self.eta);
         if u < f {
             return Some(BsdfSample {
                 wi: reflect_local(wo),
-                weight: Color::ONE,
+                weight: self.specular_reflectance,
                 pdf: 0.0,
                 specular: true,
                 eta: 1.0,
@@ -93,7 +106,7 @@ impl Dielectric {
         };
         Some(BsdfSample {
             wi,
-            weight: Color::splat(scale),
+            weight: self.specular_transmittance * scale,
             pdf: 0.0,
             specular: true,
             eta: etap,

@@ -81,6 +81,22 @@ impl Microfacet {
         }
     }
 
+    /// Sets the roughness (a textured one, per hit), clamped as [`Microfacet::new`] does.
+    #[inline]
+    pub fn set_alpha(&mut self, alpha_u: f32, alpha_v: f32) {
+        *self = Self::new(self.kind, alpha_u, alpha_v);
+    }
+
+    #[inline]
+    pub fn set_alpha_u(&mut self, alpha_u: f32) {
+        self.set_alpha(alpha_u, self.alpha_v);
+    }
+
+    #[inline]
+    pub fn set_alpha_v(&mut self, alpha_v: f32) {
+        self.set_alpha(self.alpha_u, alpha_v);
+    }
+
     pub fn ggx(alpha_u: f32, alpha_v: f32) -> Self {
         Self::new(MicrofacetType::Ggx, alpha_u, alpha_v)
     }
@@ -181,17 +197,20 @@ impl Microfacet {
         }
     }
 
-    /// Heitz 2018, listing 1.
+    /// Heitz 2018, listing 1, with the disk point's first coordinate along −T1 and T1 = y at
+    /// normal incidence: the orientation of Mitsuba's slope-space form (`sample_visible_11`,
+    /// whose azimuth frame is that of `Frame3f::sincos_phi`), so that the same random numbers
+    /// give Mitsuba's normal.
     #[inline]
     fn sample_visible_ggx(&self, wo: Vec3A, u: Vec2) -> Vec3A {
         // Stretch wo to the configuration with α = 1 (the hemisphere).
         let vh = Vec3A::new(self.alpha_u * wo.x, self.alpha_v * wo.y, wo.z).normalize();
         // An orthonormal basis around vh (T1 is perpendicular to the plane of incidence).
         let len2 = vh.x * vh.x + vh.y * vh.y;
-        let t1 = if len2 > 0.0 {
+        let t1 = if len2 > 4.0 * f32::EPSILON / 2.0 {
             Vec3A::new(-vh.y, vh.x, 0.0) / len2.sqrt()
         } else {
-            Vec3A::X
+            Vec3A::Y
         };
         let t2 = vh.cross(t1);
         // A point on the disk, squeezed onto the part of the projected hemisphere visible
@@ -201,7 +220,7 @@ impl Microfacet {
         let p1 = p.x;
         let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * p.y;
         // Reproject onto the hemisphere, then unstretch.
-        let nh = t1 * p1 + t2 * p2 + vh * (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
+        let nh = t2 * p2 - t1 * p1 + vh * (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
         Vec3A::new(self.alpha_u * nh.x, self.alpha_v * nh.y, nh.z.max(0.0)).normalize()
     }
 

@@ -3,7 +3,13 @@
 //! A closed enum, matched in the integrators' inner loops (no dynamic dispatch). All BSDFs
 //! work in the local shading frame: z is the shading normal, `wo` points towards the viewer
 //! (or the previous vertex) and `wi` towards the light; both are unit vectors.
+//!
+//! Parameters given by textures (colours, roughness, blend weights) are filled in per hit
+//! by one mechanism, [`textured`]: a parameter is a field of the BSDF, and a texture bound
+//! to it a [`Binding`] whose slot writes the texture's value there. Blends ([`blend`]) keep
+//! their parts by material index and become a mixture at the hit.
 
+pub mod blend;
 pub mod conductor;
 pub mod dielectric;
 pub mod lambert;
@@ -12,12 +18,17 @@ pub mod mirror;
 pub mod normal_map;
 pub mod oren_nayar;
 pub mod plastic;
+pub mod principled;
+pub mod principled_lobes;
+pub mod principled_thin;
 pub mod rough_conductor;
 pub mod rough_dielectric;
 pub mod rough_plastic;
 pub mod sampling;
+pub mod textured;
 pub mod thin_dielectric;
 
+pub use blend::{Blend, MAX_BLEND_DEPTH};
 pub use conductor::{conductor_ior, Conductor};
 pub use dielectric::Dielectric;
 pub use lambert::Lambert;
@@ -25,9 +36,12 @@ pub use microfacet::{Microfacet, MicrofacetType};
 pub use mirror::Mirror;
 pub use oren_nayar::OrenNayar;
 pub use plastic::Plastic;
+pub use principled::Principled;
+pub use principled_thin::PrincipledThin;
 pub use rough_conductor::RoughConductor;
 pub use rough_dielectric::RoughDielectric;
 pub use rough_plastic::RoughPlastic;
+pub use textured::{Binding, Slot};
 pub use thin_dielectric::ThinDielectric;
 
 use crate::Color;
@@ -67,6 +81,13 @@ pub enum Bsdf {
     /// A delta lobe plus a diffuse one: not all-delta (`is_specular` is false).
     Plastic(Plastic),
     RoughPlastic(RoughPlastic),
+    /// Mitsuba's `principled`: handles its own back side unless the material is two-sided.
+    Principled(Principled),
+    /// Mitsuba's `principledthin`: the same from both sides.
+    PrincipledThin(PrincipledThin),
+    /// Two BSDFs mixed by a weight, their parts by material index ([`blend`]): resolved per
+    /// hit into [`Material::mix`]; as a BSDF of its own it reflects nothing.
+    Blend(Blend),
     /// Absorbs everything (the back of a light, a black body).
     Black,
 }
@@ -84,16 +105,22 @@ impl Bsdf {
 }
 
 /// A BSDF and how it treats the back side of a surface.
-#[derive(Clone, Copy, Debug)]
+///
+/// A scene's materials hold constants and the bindings of their textured parameters; the
+/// material at a hit ([`Material::at`]) holds the values there, and for a blend the mixture
+/// of its parts.
+#[derive(Clone, Debug)]
 pub struct Material {
     pub bsdf: Bsdf,
     /// Reflective BSDFs on a one-sided material reflect nothing when seen from behind the
     /// geometric normal (Mitsuba's convention); two-sided ones reflect alike on both sides
     /// (pbrt's). Dielectrics have two sides by nature and ignore this.
     pub two_sided: bool,
-    /// A texture (index into the scene's) giving the BSDF's main colour per hit: diffuse
-    /// reflectance, or a metal's specular reflectance.
-    pub texture: Option<u32>,
+    /// The textured parameters ([`textured`]); empty for a material of constants.
+    pub slots: Box<[Binding]>,
+    /// At a hit on a blend: its leaves and their weights ([`blend`]); the methods below
+    /// then describe the mixture.
+    pub mix: Option<Box<[blend::Part]>>,
     /// `normalmap`: an RGB texture of shading-frame normals ([`normal_map`]).
     pub normal_map: Option<u32>,
     /// `bumpmap`: a height texture and its scale ([`normal_map`]).
@@ -111,7 +138,8 @@ impl Material {
         Material {
             bsdf,
             two_sided,
-            texture: None,
+            slots: Box::default(),
+            mix: None,
             normal_map: None,
             bump: None,
             opacity: None,
@@ -128,58 +156,34 @@ impl Material {
     /// Whether anything of the material varies with the texture coordinates of a hit.
     #[inline]
     pub fn reads_uv(&self) -> bool {
-        self.texture.is_some() || self.perturbs() || self.opacity.is_some()
-    }
-
-    /// Whether the BSDF has a main colour a texture can give.
-    pub fn takes_texture(&self) -> bool {
-        matches!(
-            self.bsdf,
-            Bsdf::Lambert(_)
-                | Bsdf::OrenNayar(_)
-                | Bsdf::Mirror(_)
-                | Bsdf::Conductor(_)
-                | Bsdf::RoughConductor(_)
-                | Bsdf::Plastic(_)
-                | Bsdf::RoughPlastic(_)
-        )
-    }
-
-    /// This material with its main colour set to `c` (a texture's value at a hit). Derived
-    /// quantities such as plastic's lobe-selection weight keep the values they were built
-    /// with, from the texture's mean, as in Mitsuba.
-    #[inline]
-    pub fn with_color(mut self, c: Color) -> Material {
-        match &mut self.bsdf {
-            Bsdf::Lambert(b) => b.albedo = c,
-            Bsdf::OrenNayar(b) => b.albedo = c,
-            Bsdf::Mirror(b) => b.reflectance = c,
-            Bsdf::Conductor(b) => b.specular_reflectance = c,
-            Bsdf::RoughConductor(b) => b.specular_reflectance = c,
-            Bsdf::Plastic(b) => b.diffuse_reflectance = c,
-            Bsdf::RoughPlastic(b) => b.diffuse_reflectance = c,
-            _ => {}
-        }
-        self
+        self.varies() || self.perturbs() || self.opacity.is_some()
     }
 
     /// True when every scattering is a delta (mirror, glass, smooth metal, thin sheet): no
     /// light sampling there. Plastic mixes a delta lobe with a diffuse one and is not.
     #[inline]
     pub fn is_specular(&self) -> bool {
+        if let Some(parts) = &self.mix {
+            return parts.iter().all(|p| p.material.is_specular());
+        }
         matches!(
             self.bsdf,
             Bsdf::Mirror(_) | Bsdf::Dielectric(_) | Bsdf::Conductor(_) | Bsdf::ThinDielectric(_)
         )
     }
 
-    /// True for BSDFs that transmit as well as reflect (two-sided by nature).
+    /// True for BSDFs that transmit as well as reflect (two-sided by nature), and the
+    /// principled BSDF, which has a back side of its own unless wrapped in `twosided`.
     #[inline]
     fn is_transmissive(&self) -> bool {
-        matches!(
-            self.bsdf,
-            Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_) | Bsdf::ThinDielectric(_)
-        )
+        match self.bsdf {
+            Bsdf::Dielectric(_)
+            | Bsdf::RoughDielectric(_)
+            | Bsdf::ThinDielectric(_)
+            | Bsdf::PrincipledThin(_) => true,
+            Bsdf::Principled(_) => !self.two_sided,
+            _ => false,
+        }
     }
 
     #[inline]
@@ -229,6 +233,9 @@ impl Material {
     /// [`Material::eval_mode`] of the BSDF itself, in the (perturbed) shading frame.
     #[inline]
     fn eval_nested(&self, wo: Vec3A, wi: Vec3A, mode: TransportMode) -> Color {
+        if let Some(parts) = &self.mix {
+            return blend::eval_pdf(parts, wo, wi, mode).0;
+        }
         if let Bsdf::RoughDielectric(b) = &self.bsdf {
             return b.eval(wo, wi, mode);
         }
@@ -243,6 +250,8 @@ impl Material {
             Bsdf::RoughConductor(b) => b.eval(wo, wi),
             Bsdf::Plastic(b) => b.eval(wo, wi),
             Bsdf::RoughPlastic(b) => b.eval(wo, wi),
+            Bsdf::Principled(b) => b.eval(wo, wi, mode),
+            Bsdf::PrincipledThin(b) => b.eval(wo, wi),
             _ => Color::ZERO,
         }
     }
@@ -266,6 +275,9 @@ impl Material {
 
     #[inline(always)]
     fn eval_pdf_nested(&self, wo: Vec3A, wi: Vec3A) -> (Color, f32) {
+        if let Some(parts) = &self.mix {
+            return blend::eval_pdf(parts, wo, wi, TransportMode::Radiance);
+        }
         if let Bsdf::RoughDielectric(b) = &self.bsdf {
             return (b.eval(wo, wi, TransportMode::Radiance), b.pdf(wo, wi));
         }
@@ -280,6 +292,11 @@ impl Material {
             Bsdf::RoughConductor(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
             Bsdf::Plastic(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
             Bsdf::RoughPlastic(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
+            Bsdf::Principled(b) => {
+                let (f, pdf) = b.eval_cos_pdf(wo, wi, TransportMode::Radiance);
+                (if wi.z == 0.0 { f } else { f / wi.z.abs() }, pdf)
+            }
+            Bsdf::PrincipledThin(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
             _ => (Color::ZERO, 0.0),
         }
     }
@@ -295,6 +312,9 @@ impl Material {
 
     #[inline]
     fn pdf_nested(&self, wo: Vec3A, wi: Vec3A) -> f32 {
+        if let Some(parts) = &self.mix {
+            return blend::eval_pdf(parts, wo, wi, TransportMode::Radiance).1;
+        }
         if let Bsdf::RoughDielectric(b) = &self.bsdf {
             return b.pdf(wo, wi);
         }
@@ -307,6 +327,8 @@ impl Material {
             Bsdf::RoughConductor(b) => b.pdf(wo, wi),
             Bsdf::Plastic(b) => b.pdf(wo, wi),
             Bsdf::RoughPlastic(b) => b.pdf(wo, wi),
+            Bsdf::Principled(b) => b.pdf(wo, wi),
+            Bsdf::PrincipledThin(b) => b.pdf(wo, wi),
             _ => 0.0,
         }
     }
@@ -333,6 +355,9 @@ impl Material {
         u2: Vec2,
         mode: TransportMode,
     ) -> Option<BsdfSample> {
+        if let Some(parts) = &self.mix {
+            return blend::sample(parts, wo, u1, u2, mode);
+        }
         let s = self.orient(wo)?;
         let flip = Vec3A::new(1.0, 1.0, s);
         let wo_f = wo * flip;
@@ -347,7 +372,9 @@ impl Material {
             Bsdf::ThinDielectric(b) => return b.sample(wo, u1),
             Bsdf::Plastic(b) => b.sample(wo_f, u1, u2),
             Bsdf::RoughPlastic(b) => b.sample(wo_f, u1, u2),
-            Bsdf::Black => None,
+            Bsdf::Principled(b) => b.sample(wo_f, u1, u2, mode),
+            Bsdf::PrincipledThin(b) => b.sample(wo_f, u1, u2),
+            Bsdf::Blend(_) | Bsdf::Black => None,
         }?;
         bs.wi *= flip;
         Some(bs)
@@ -356,6 +383,9 @@ impl Material {
     /// The directional-hemispherical reflectance at normal incidence, roughly: the colour a
     /// denoiser or photon tracer takes as the surface's albedo.
     pub fn albedo(&self) -> Color {
+        if let Some(parts) = &self.mix {
+            return blend::albedo(parts);
+        }
         match &self.bsdf {
             Bsdf::Lambert(b) => b.albedo,
             Bsdf::OrenNayar(b) => b.albedo,
@@ -375,7 +405,10 @@ impl Material {
                 let f0 = dielectric::fresnel_dielectric(1.0, b.eta);
                 b.specular_reflectance * f0 + b.diffuse_reflectance * (1.0 - f0)
             }
-            Bsdf::Black => Color::ZERO,
+            // Mitsuba's `eval_diffuse_reflectance`.
+            Bsdf::Principled(b) => b.base_color,
+            Bsdf::PrincipledThin(b) => b.base_color,
+            Bsdf::Blend(_) | Bsdf::Black => Color::ZERO,
         }
     }
 }

@@ -11,7 +11,6 @@
 
 use crate::geometry::Frame;
 use crate::texture::{Bitmap, FilterType, Texture};
-use crate::Color;
 use glam::{Vec2, Vec3A};
 
 /// A `bumpmap`'s height texture and the `scale` its gradient is multiplied by.
@@ -38,10 +37,7 @@ pub struct HitGeometry {
 }
 
 /// Rec. 709 luminance: how Mitsuba reads an RGB texture as one number (`eval_1`).
-#[inline]
-pub fn luminance(c: Color) -> f32 {
-    c.dot(Color::new(0.212671, 0.715160, 0.072169))
-}
+pub use crate::texture::luminance;
 
 /// The shading frame Mitsuba builds at a hit: the normal `n`, and the tangent `dpdu` made
 /// orthogonal to it (an arbitrary one where `dpdu` is parallel to `n` or zero).
@@ -141,8 +137,8 @@ pub fn float_gradient(tex: &Texture, uv: Vec2) -> Vec2 {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Perturbed {
     /// The unperturbed shading normal in the local frame of the perturbed one
-    /// (`Frame::from_normal`, the integrators' frame).
-    base: Vec3A,
+    /// (`Frame::from_normal`, the integrators' frame); unaligned, to keep `Material` small.
+    base: glam::Vec3,
     /// The shadowing term's α² = min(tan²θ/8, 1), θ the angle between the two normals.
     alpha2: f32,
 }
@@ -152,7 +148,7 @@ impl Perturbed {
     pub fn new(n: Vec3A, base: Vec3A) -> Perturbed {
         let c = n.dot(base);
         Perturbed {
-            base: Frame::from_normal(n).to_local(base),
+            base: Frame::from_normal(n).to_local(base).into(),
             alpha2: (0.125 * tan2(c)).min(1.0),
         }
     }
@@ -163,7 +159,7 @@ impl Perturbed {
     /// 2 / (1 + √(1 + α² tan²θᵢ)), θᵢ measured from the unperturbed normal.
     #[inline]
     pub fn factor(&self, wi: Vec3A) -> f32 {
-        let c = wi.dot(self.base);
+        let c = wi.dot(Vec3A::from(self.base));
         if c * wi.z <= 0.0 {
             return 0.0;
         }
@@ -182,6 +178,7 @@ fn tan2(c: f32) -> f32 {
 mod tests {
     use super::*;
     use crate::texture::{BitmapTexture, UvTransform, WrapMode};
+    use crate::Color;
     use std::sync::Arc;
 
     fn bitmap(w: u32, h: u32, px: Vec<Color>) -> Texture {
@@ -264,7 +261,10 @@ mod tests {
             (f(Vec2::new(h, 0.0)) - f(Vec2::new(-h, 0.0))) / (2.0 * h),
             (f(Vec2::new(0.0, h)) - f(Vec2::new(0.0, -h))) / (2.0 * h),
         );
-        assert!((g - fd).length() < 1e-2 * fd.length().max(1.0), "{g} vs {fd}");
+        assert!(
+            (g - fd).length() < 1e-2 * fd.length().max(1.0),
+            "{g} vs {fd}"
+        );
         assert!(g.length() > 0.1, "a gradient that cannot be zero: {g}");
     }
 
@@ -287,13 +287,58 @@ mod tests {
         assert!((n - want).length() < 1e-5, "{n} vs {want}");
     }
 
+    /// The BSDF values of a normal-mapped and a bump-mapped diffuse surface, as Mitsuba 3
+    /// computes them (tests/data/maps_mitsuba.txt): the perturbed normal, its flip towards
+    /// the viewer, the light-leak test and the shadowing term together.
+    #[test]
+    fn values_agree_with_mitsuba() {
+        use crate::material::{Bsdf, Lambert, Material};
+        let height = [0.1, 0.5, 0.3, 0.9, 0.2, 0.6].map(Color::splat).to_vec();
+        let tex = [
+            bitmap(1, 1, vec![Color::new(0.8, 0.4, 0.9)]),
+            bitmap(3, 2, height),
+        ];
+        let data = include_str!("../../tests/data/maps_mitsuba.txt");
+        let mut n_cases = 0;
+        for line in data.lines().filter(|l| !l.starts_with('#')) {
+            let w: Vec<&str> = line.split_whitespace().collect();
+            let x: Vec<f32> = w[1..].iter().map(|v| v.parse().unwrap()).collect();
+            let (viewer, light) = (Vec3A::new(x[0], x[1], x[2]), Vec3A::new(x[3], x[4], x[5]));
+            let (normal_map, bump) = match w[0] {
+                "normal" => (Some(0), None),
+                _ => (
+                    None,
+                    Some(Bump {
+                        texture: 1,
+                        scale: 0.3,
+                    }),
+                ),
+            };
+            let mut h = hit(Vec3A::Z, viewer);
+            h.uv = Vec2::new(0.3, 0.6);
+            let n = perturbed_normal(normal_map, bump, &h, &tex);
+            let albedo = Color::splat(0.5);
+            let mut m = Material::new(Bsdf::Lambert(Lambert { albedo }), false);
+            m.perturbed = Some(Perturbed::new(n, Vec3A::Z));
+            let f = Frame::from_normal(n);
+            let wi = f.to_local(light);
+            let got = m.eval(f.to_local(viewer), wi).x * wi.z.abs();
+            assert!(
+                (got - x[6]).abs() < 1e-5 + 1e-4 * x[6],
+                "{line}: mcrt {got}"
+            );
+            n_cases += 1;
+        }
+        assert_eq!(n_cases, 30);
+    }
+
     #[test]
     fn guard_blocks_light_between_the_normals_and_shadows_grazing_light() {
         let n = Vec3A::new(0.5, 0.0, 1.0).normalize();
         let p = Perturbed::new(n, Vec3A::Z);
         let frame = Frame::from_normal(n);
         // Above the perturbed normal's horizon, below the unperturbed one's: blocked.
-        let below = Vec3A::new(-0.2, 0.3, -0.05).normalize();
+        let below = Vec3A::new(0.9, 0.2, -0.1).normalize();
         assert!(frame.to_local(below).z > 0.0);
         assert_eq!(p.factor(frame.to_local(below)), 0.0);
         // Straight along the unperturbed normal: no shadowing (tan θ = 0).

@@ -12,7 +12,8 @@
 //!   smooth `Dielectric` does).
 //!
 //! The reflection or the refraction through the sampled microfacet is chosen with
-//! probability F and 1 − F.
+//! probability F and 1 − F. Mitsuba's `specular_reflectance` and `specular_transmittance`
+//! scale the two (1 for physical realism).
 
 use super::dielectric::{fresnel_dielectric, fresnel_refraction};
 use super::microfacet::{reflect_about, Microfacet};
@@ -25,6 +26,9 @@ pub struct RoughDielectric {
     pub distr: Microfacet,
     /// Relative index of refraction: inside over outside (the side the normal points to).
     pub eta: f32,
+    /// Factors on the reflected and the refracted light.
+    pub specular_reflectance: Color,
+    pub specular_transmittance: Color,
 }
 
 /// The generalised half vector of `wo` and `wi` on the upper hemisphere, whether the pair
@@ -39,7 +43,12 @@ fn half_vector(wo: Vec3A, wi: Vec3A, eta: f32) -> (Vec3A, bool, f32) {
 
 impl RoughDielectric {
     pub fn new(distr: Microfacet, eta: f32) -> Self {
-        RoughDielectric { distr, eta }
+        RoughDielectric {
+            distr,
+            eta,
+            specular_reflectance: Color::ONE,
+            specular_transmittance: Color::ONE,
+        }
     }
 
     #[inline]
@@ -66,10 +75,12 @@ impl RoughDielectric {
             (scale * (1.0 - f) * d * g * eta * eta * wo_m * wi_m / (wo.z * wi.z * denom * denom))
                 .abs()
         };
-        if v.is_finite() {
-            Color::splat(v)
-        } else {
+        if !v.is_finite() {
             Color::ZERO
+        } else if reflect {
+            self.specular_reflectance * v
+        } else {
+            self.specular_transmittance * v
         }
     }
 
@@ -113,7 +124,8 @@ impl RoughDielectric {
         }
         let wo_m = wo.dot(m);
         let (f, cos_t, eta_it, eta_ti) = fresnel_refraction(wo_m, self.eta);
-        let (wi, mut weight, eta, dm_dwi) = if u1 <= f {
+        let reflect = u1 <= f;
+        let (wi, mut weight, eta, dm_dwi) = if reflect {
             let wi = reflect_about(wo, m);
             pdf *= f;
             (wi, 1.0, 1.0, 1.0 / (4.0 * wi.dot(m)))
@@ -136,9 +148,14 @@ impl RoughDielectric {
         if weight.is_nan() || weight <= 0.0 || !pdf.is_finite() || pdf <= 0.0 {
             return None;
         }
+        let factor = if reflect {
+            self.specular_reflectance
+        } else {
+            self.specular_transmittance
+        };
         Some(BsdfSample {
             wi,
-            weight: Color::splat(weight),
+            weight: factor * weight,
             pdf,
             specular: false,
             eta,

@@ -175,10 +175,14 @@ pub fn irradiance_estimate(map: &PhotonMap, p: Vec3A, n: Vec3A, k: usize, r_max:
 
 /// Reflected radiance at a Lambertian point from the nearest precomputed irradiance point
 /// (within `r_max`, normal within about 25° of the point's, on the same side): ρ/π·E. None
-/// where there is none, or the material is not Lambertian (the caller falls back to
-/// [`radiance_estimate`]).
+/// where there is none, or the material is not Lambertian or is normal-mapped (the caller
+/// falls back to [`radiance_estimate`]).
 pub fn precomputed_radiance(map: &PhotonMap, sp: &ShadingPoint, r_max: f32) -> Option<Color> {
-    if map.is_empty() || !matches!(sp.material.bsdf, crate::material::Bsdf::Lambert(_)) {
+    // (A normal or bump map's factor varies with the photon's direction: no shortcut.)
+    if map.is_empty()
+        || !matches!(sp.material.bsdf, crate::material::Bsdf::Lambert(_))
+        || sp.material.perturbed.is_some()
+    {
         return None;
     }
     let ng = sp.si.ng;
@@ -198,7 +202,6 @@ pub fn precomputed_radiance(map: &PhotonMap, sp: &ShadingPoint, r_max: f32) -> O
 /// Bounding-box diagonal of the scene (sets default search radii).
 pub fn scene_diagonal(scene: &Scene) -> f32 {
     scene
-        .bvh
         .bounds()
         .map(|b| b.extent().length())
         .filter(|d| d.is_finite() && *d > 0.0)

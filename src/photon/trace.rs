@@ -1,5 +1,7 @@
-//! Photon shooting: photons leave the area lights in proportion to their power, from a point
-//! uniform on the light in a cosine-distributed direction, and bounce with the path tracer's
+//! Photon shooting: photons leave the lights in proportion to their power: area lights from
+//! a point uniform on the light in a cosine-distributed direction, spot lights uniformly
+//! within their cone, image environments from a disk facing a direction the map samples
+//! (point, directional and constant lights emit none), and bounce with the path tracer's
 //! BSDFs (importance transport); Russian roulette by the BSDF sample's weight (the albedo for
 //! diffuse surfaces) keeps their power nearly constant. Photons are stored at non-specular
 //! hits.
@@ -12,11 +14,13 @@ use super::photon::Photon;
 use crate::geometry::ray::offset_ray_origin;
 use crate::geometry::{Frame, Ray};
 use crate::light::distribution::Distribution1D;
+use crate::light::OtherLight;
 use crate::material::sampling::square_to_cosine_hemisphere;
 use crate::material::TransportMode;
 use crate::sampler::{mix64, Sampler};
 use crate::scene::Scene;
 use crate::Color;
+use glam::Vec3A;
 use rayon::prelude::*;
 
 /// Which photons a pass keeps.
@@ -70,11 +74,81 @@ const CHUNK: u64 = 4096;
 /// Surfaces a shadow photon's ray passes through at most.
 const MAX_SHADOW_HITS: u32 = 4;
 
-/// The distribution over the scene's area lights by power, or None without any.
+/// The distribution over the lights photons leave, by power: the area lights, then the
+/// others in `Lights::others` order, of which spots and image environments emit (the
+/// others weigh 0); None without any.
 pub fn light_distribution(scene: &Scene) -> Option<Distribution1D> {
-    let powers: Vec<f32> = scene.lights.lights.iter().map(|l| l.power()).collect();
+    let (_, radius) = scene_sphere(scene);
+    let powers: Vec<f32> = scene
+        .lights
+        .lights
+        .iter()
+        .map(|l| l.power())
+        .chain(scene.lights.others.iter().map(|o| match o {
+            OtherLight::Spot(_) | OtherLight::Envmap(_) => o.power(radius),
+            _ => 0.0,
+        }))
+        .collect();
     let d = Distribution1D::new(&powers);
     (!d.is_empty()).then_some(d)
+}
+
+/// A sphere around the scene's primitives: centre and radius (a little larger than half the
+/// bounds' diagonal, so that a photon from an environment starts outside everything).
+fn scene_sphere(scene: &Scene) -> (Vec3A, f32) {
+    match scene.bvh.bounds() {
+        Some(b) => (
+            0.5 * (b.min + b.max),
+            (0.5 * (b.max - b.min).length() * 1.001).max(1e-3),
+        ),
+        None => (Vec3A::ZERO, 1.0),
+    }
+}
+
+/// A photon's first ray and power (before the division by the photon count) from a light
+/// that is not a surface, chosen with probability `pmf`; None when the sample carries
+/// nothing.
+fn emit_other(
+    scene: &Scene,
+    light: &OtherLight,
+    pmf: f32,
+    s: &mut Sampler,
+) -> Option<(Ray, Color)> {
+    match light {
+        // A direction uniform in the cone of the cutoff around the axis (pdf 1/(2π(1 −
+        // cos θmax))), weighted by the intensity the light sends along it.
+        OtherLight::Spot(sp) => {
+            let u = s.next_2d();
+            let cos_max = sp.cos_cutoff();
+            let cos_t = 1.0 - u.x * (1.0 - cos_max);
+            let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+            let (sin_p, cos_p) = (2.0 * std::f32::consts::PI * u.y).sin_cos();
+            let d = Frame::from_normal(sp.axis()).to_world(Vec3A::new(
+                sin_t * cos_p,
+                sin_t * sin_p,
+                cos_t,
+            ));
+            let pdf = 1.0 / (2.0 * std::f32::consts::PI * (1.0 - cos_max));
+            let i = sp.intensity_towards(d);
+            (i != Color::ZERO).then(|| (Ray::new(sp.position, d), i / (pdf * pmf)))
+        }
+        // A direction by the map's own sampling, and a point uniform on a disk of the scene
+        // sphere's radius facing it, outside the sphere: L·πR²/p(ω) (pbrt-v4's
+        // `ImageInfiniteLight::SampleLe`).
+        OtherLight::Envmap(e) => {
+            let (wi, le, pdf) = e.sample(s.next_2d())?;
+            let (centre, r) = scene_sphere(scene);
+            let u = s.next_2d();
+            let (rr, (sin_p, cos_p)) =
+                (r * u.x.sqrt(), (2.0 * std::f32::consts::PI * u.y).sin_cos());
+            let o = centre
+                + wi * r
+                + Frame::from_normal(wi).to_world(Vec3A::new(rr * cos_p, rr * sin_p, 0.0));
+            let area = std::f32::consts::PI * r * r;
+            Some((Ray::new(o, -wi), le * (area / (pdf * pmf))))
+        }
+        _ => None,
+    }
 }
 
 /// Emits `n` photons and traces them through the scene.
@@ -147,12 +221,24 @@ fn trace_one(
     let Some((id, pmf)) = dist.sample_discrete(s.next_1d()) else {
         return;
     };
-    let light = &scene.lights.lights[id];
-    let (p, nl, err) = light.sample_point(s.next_2d());
-    let d = Frame::from_normal(nl).to_world(square_to_cosine_hemisphere(s.next_2d()));
-    // Le·cos / (pmf · 1/A · cos/π) / n
-    let mut power = light.radiance * (std::f32::consts::PI * light.area / (pmf * n as f32));
-    let mut ray = Ray::new(offset_ray_origin(p, err, nl, d), d);
+    let (mut ray, mut power) = match scene.lights.lights.get(id) {
+        Some(light) => {
+            let u = s.next_2d();
+            let (p, nl, err) = light.sample_point(u);
+            let d = Frame::from_normal(nl).to_world(square_to_cosine_hemisphere(s.next_2d()));
+            // Le·cos / (pmf · 1/A · cos/π) / n
+            let le = scene.lights.radiance_of_sample(id, u, nl);
+            let power = le * (std::f32::consts::PI * light.area / (pmf * n as f32));
+            (Ray::new(offset_ray_origin(p, err, nl, d), d), power)
+        }
+        None => {
+            let other = &scene.lights.others[id - scene.lights.lights.len()];
+            let Some((ray, power)) = emit_other(scene, other, pmf, &mut s) else {
+                return;
+            };
+            (ray, power / n as f32)
+        }
+    };
     let mut depth = 1u32;
     let mut specular_path = true;
     loop {

@@ -2,8 +2,8 @@
 //! spheres in BVH order, materials, and one area light per emissive triangle or sphere.
 
 use super::{
-    desc::GeometryDesc, desc::LightDesc, MeshAttrs, Scene, SceneDesc, META_ATTRS, META_EMITTER,
-    META_MATERIAL, SPHERE,
+    desc::GeometryDesc, desc::LightDesc, MeshAttrs, Scene, SceneDesc, SphereFrame, META_ATTRS,
+    META_EMITTER, META_MATERIAL, SPHERE,
 };
 use crate::accel::bvh::{self, PrimRef};
 use crate::accel::{huge_pages, BuildTimes};
@@ -18,6 +18,7 @@ impl Scene {
     /// with a message (the CLI checks before it builds).
     pub fn build(mut desc: SceneDesc) -> Scene {
         let mut times = BuildTimes::start();
+        let instances = super::instance::build(&mut desc, &mut times);
         let masked = desc.materials.iter().any(|m| m.opacity.is_some());
         // Primitives in the description's order: vertex indices (or a sphere), material and
         // flags, and bounds.
@@ -28,17 +29,27 @@ impl Scene {
         let mut uvs = Vec::new();
         let mut attrs = Vec::new();
         let mut spheres = Vec::new();
+        let mut sphere_frames = Vec::new();
         let mut lights = Vec::new();
         // (primitive, light) of the emitting primitives, by primitive.
         let mut emitting: Vec<(u32, u32)> = Vec::new();
         // (Shapes are taken by value: the first mesh's arrays become the scene's, uncopied.)
-        for shape in std::mem::take(&mut desc.shapes) {
-            let emission = shape.emission.filter(|e| e.max_element() > 0.0);
+        for (index, shape) in std::mem::take(&mut desc.shapes).into_iter().enumerate() {
+            let emission_texture = desc
+                .emission_textures
+                .iter()
+                .find(|&&(s, _)| s == index)
+                .map(|&(_, t)| t);
+            let emission = shape
+                .emission
+                .filter(|e| e.max_element() > 0.0 || emission_texture.is_some());
             assert!(shape.material <= META_MATERIAL, "too many materials");
             let mut m = shape.material;
             if emission.is_some() {
                 m |= META_EMITTER;
             }
+            // (centre, radius, frame) of a sphere, pushed after the match.
+            let mut sphere = None;
             match shape.geometry {
                 GeometryDesc::Mesh(mesh) => {
                     let base = positions.len() as u32;
@@ -52,7 +63,8 @@ impl Scene {
                     // (A normal or bump map needs the flag for its partials, with or
                     // without texture coordinates.)
                     let mat = desc.materials.get(shape.material as usize);
-                    let textured = mat.is_some_and(|mat| mat.reads_uv());
+                    let textured =
+                        emission_texture.is_some() || mat.is_some_and(|mat| mat.reads_uv());
                     let perturbs = mat.is_some_and(|mat| mat.perturbs());
                     if mesh.normals.is_some() || (mesh.uvs.is_some() && textured) || perturbs {
                         m |= META_ATTRS;
@@ -99,7 +111,33 @@ impl Scene {
                                 Triangle::new(a, b, c)
                             })
                             .collect();
-                        for (k, light) in mesh_lights(&kept_tris, e, &mut lights).enumerate() {
+                        let ids: Vec<u32> = match emission_texture {
+                            None => mesh_lights(&kept_tris, e, &mut lights).collect(),
+                            Some(t) => {
+                                // Barycentric coordinates stand in for missing uvs, as at a hit.
+                                let uv = |i: u32| {
+                                    mesh.uvs
+                                        .as_ref()
+                                        .map_or(glam::Vec2::ZERO, |u| u[(i - base) as usize])
+                                };
+                                let corners = [glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::Y];
+                                kept.iter()
+                                    .zip(&kept_tris)
+                                    .map(|(idx, tri)| {
+                                        let uvs = match mesh.uvs {
+                                            Some(_) => idx.map(uv),
+                                            None => corners,
+                                        };
+                                        lights.push(
+                                            AreaLight::new(LightShape::Triangle(*tri), e)
+                                                .with_texture(t, uvs),
+                                        );
+                                        (lights.len() - 1) as u32
+                                    })
+                                    .collect()
+                            }
+                        };
+                        for (k, light) in ids.into_iter().enumerate() {
                             emitting.push(((tris.len() + k) as u32, light));
                         }
                     }
@@ -116,18 +154,39 @@ impl Scene {
                     }
                 }
                 GeometryDesc::Sphere { center, radius } => {
-                    let s = Sphere {
-                        center: center.into(),
-                        radius,
-                    };
-                    if let Some(e) = emission {
-                        lights.push(AreaLight::new(LightShape::Sphere(s), e));
-                        emitting.push((tris.len() as u32, (lights.len() - 1) as u32));
-                    }
-                    tris.push([SPHERE, spheres.len() as u32, 0]);
-                    meta.push(m);
-                    spheres.push(s);
+                    sphere = Some((center, radius, SphereFrame::default()));
                 }
+                GeometryDesc::OrientedSphere {
+                    center,
+                    radius,
+                    rotation,
+                    flip,
+                } => {
+                    let frame = SphereFrame {
+                        to_local: (rotation != glam::Mat3::IDENTITY)
+                            .then(|| glam::Mat3A::from(rotation.transpose())),
+                        flip,
+                    };
+                    sphere = Some((center, radius, frame));
+                }
+            }
+            if let Some((center, radius, frame)) = sphere {
+                let s = Sphere {
+                    center: center.into(),
+                    radius,
+                };
+                if let Some(e) = emission {
+                    let mut light = AreaLight::new(LightShape::Sphere(s), e);
+                    if let Some(t) = emission_texture {
+                        light = light.with_texture(t, light.uvs);
+                    }
+                    lights.push(if frame.flip { light.inward() } else { light });
+                    emitting.push((tris.len() as u32, (lights.len() - 1) as u32));
+                }
+                tris.push([SPHERE, spheres.len() as u32, 0]);
+                meta.push(m);
+                spheres.push(s);
+                sphere_frames.push(frame);
             }
         }
         assert!(tris.len() < 1 << 27, "too many primitives");
@@ -149,9 +208,9 @@ impl Scene {
             PrimRef::new(&bounds_of(idx), i, idx[0] == SPHERE)
         };
         let (wide, order) = bvh::build(tris.len(), prim, &mut times);
-        let radius = wide
-            .bounds()
-            .map_or(1.0, |world| 0.5 * (world.max - world.min).length());
+        let bounds =
+            super::instance::union(wide.bounds(), instances.as_ref().and_then(|i| i.bounds()));
+        let radius = bounds.map_or(1.0, |world| 0.5 * (world.max - world.min).length());
         let others = desc
             .lights
             .iter()
@@ -228,6 +287,7 @@ impl Scene {
             meta,
             positions,
             spheres,
+            sphere_frames,
             #[cfg(target_arch = "x86_64")]
             flat,
             emitters,
@@ -236,10 +296,17 @@ impl Scene {
             attrs,
             bvh: wide,
             materials: desc.materials,
-            lights: Lights::with_others(lights, others, radius),
+            lights: Lights::with_others(lights, others, radius).with_textures(
+                if desc.emission_textures.is_empty() {
+                    Vec::new()
+                } else {
+                    desc.textures.clone()
+                },
+            ),
             textures: desc.textures,
             cameras: desc.cameras,
             desc_settings: desc.settings,
+            instances,
             masked,
         }
     }

@@ -9,7 +9,19 @@ use glam::Vec3;
 #[derive(Clone, Debug)]
 pub enum GeometryDesc {
     Mesh(TriangleMesh),
-    Sphere { center: Vec3, radius: f32 },
+    Sphere {
+        center: Vec3,
+        radius: f32,
+    },
+    /// A sphere with a frame of its own (Mitsuba's, set by `to_world`): `rotation` takes its
+    /// local axes, in which texture coordinates are (φ/2π, θ/π), to the world's; `flip`
+    /// turns its normals inwards (`flip_normals`).
+    OrientedSphere {
+        center: Vec3,
+        radius: f32,
+        rotation: glam::Mat3,
+        flip: bool,
+    },
 }
 
 #[derive(Clone, Debug)]
@@ -84,8 +96,31 @@ pub struct SceneDesc {
     pub lights: Vec<LightDesc>,
     /// Textures that materials refer to by index.
     pub textures: Vec<crate::texture::Texture>,
+    /// (shape index, texture) of the area lights whose radiance is a texture, by shape;
+    /// their `ShapeDesc::emission` is the texture's mean.
+    pub emission_textures: Vec<(usize, u32)>,
     /// Things the loader accepted but rendered differently, one line each with file:line:col.
     pub warnings: Vec<String>,
+    /// Shapes stored once and placed by `instances` (see [`super::instance`]).
+    pub groups: Vec<GroupDesc>,
+    pub instances: Vec<InstanceDesc>,
+}
+
+/// Shapes stored, and their BVH built, once, whatever the number of instances that place
+/// them; never rendered by themselves (Mitsuba's `shapegroup`). Their shapes may not emit.
+#[derive(Clone, Debug, Default)]
+pub struct GroupDesc {
+    pub name: String,
+    pub shapes: Vec<ShapeDesc>,
+}
+
+/// One placement of a group (Mitsuba's `instance`): `to_world` maps the group's object space
+/// to the world; it must be invertible.
+#[derive(Clone, Copy, Debug)]
+pub struct InstanceDesc {
+    /// Index into `SceneDesc::groups`.
+    pub group: u32,
+    pub to_world: glam::Affine3A,
 }
 
 /// Most primitives (triangles and spheres) a scene may hold: the BVH's leaves name a
@@ -98,22 +133,29 @@ impl SceneDesc {
     /// materials than a primitive's 30 bits of material index. (Checked before the build,
     /// which would otherwise stop on an assertion.)
     pub fn check_limits(&self) -> Result<(), String> {
-        let (mut prims, mut vertices) = (0usize, 0usize);
-        for s in &self.shapes {
-            match &s.geometry {
-                GeometryDesc::Mesh(m) => {
-                    prims += m.indices.len();
-                    vertices += m.positions.len();
-                }
-                GeometryDesc::Sphere { .. } => prims += 1,
-            }
-        }
-        check_counts(prims, vertices, self.materials.len())
+        let (prims, vertices) = shape_counts(&self.shapes);
+        check_counts(prims, vertices, self.materials.len())?;
+        super::instance::check_limits(self)
     }
 }
 
+/// The primitives (triangles and spheres) and vertices of `shapes`.
+pub(super) fn shape_counts(shapes: &[ShapeDesc]) -> (usize, usize) {
+    let (mut prims, mut vertices) = (0usize, 0usize);
+    for s in shapes {
+        match &s.geometry {
+            GeometryDesc::Mesh(m) => {
+                prims += m.indices.len();
+                vertices += m.positions.len();
+            }
+            GeometryDesc::Sphere { .. } | GeometryDesc::OrientedSphere { .. } => prims += 1,
+        }
+    }
+    (prims, vertices)
+}
+
 /// [`SceneDesc::check_limits`] on the counts.
-fn check_counts(prims: usize, vertices: usize, materials: usize) -> Result<(), String> {
+pub(super) fn check_counts(prims: usize, vertices: usize, materials: usize) -> Result<(), String> {
     if prims > MAX_PRIMITIVES {
         return Err(format!(
             "the scene has {prims} triangles and spheres; mcrt renders at most {MAX_PRIMITIVES}"

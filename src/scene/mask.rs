@@ -45,7 +45,8 @@ impl Scene {
         let idx = self.tris[i];
         if idx[0] == SPHERE {
             let s = &self.spheres[idx[1] as usize];
-            return sphere_uv((ray.at(t) - s.center).normalize());
+            let frame = &self.sphere_frames[idx[1] as usize];
+            return sphere_uv(frame.local((ray.at(t) - s.center).normalize()));
         }
         let uvs = if self.meta[i] & META_ATTRS != 0 {
             self.vertex_uvs(idx)
@@ -82,15 +83,15 @@ mod tests {
     use crate::accel::{ShadowPacket, PACKET};
     use glam::Vec3A;
 
-    /// A masked unit quad (z = 0) of opacity `opacity` (XML) in front of an opaque one
-    /// (z = −1), both facing +z.
+    /// A masked quad ([−1, 1]², z = 0) of opacity `opacity` (XML) in front of a larger
+    /// opaque one (z = −1), both facing +z.
     fn scene(opacity: &str) -> Scene {
         let xml = format!(
             "<scene version=\"3.0.0\">\
              <shape type=\"rectangle\"><bsdf type=\"mask\">{opacity}<bsdf type=\"diffuse\"/>\
              </bsdf></shape>\
-             <shape type=\"rectangle\"><transform name=\"to_world\"><translate z=\"-1\"/>\
-             </transform></shape></scene>"
+             <shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"2\"/>\
+             <translate z=\"-1\"/></transform></shape></scene>"
         );
         let desc = crate::scene::xml::parse_xml(
             std::path::Path::new("mask.xml"),

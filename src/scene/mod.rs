@@ -5,25 +5,28 @@
 //! materials and lights.
 
 pub mod build;
+pub mod cylinder;
 pub mod desc;
 pub mod error;
 pub mod gltf;
+pub mod instance;
 pub mod mask;
 pub mod obj;
 mod perturb;
 pub mod ply;
+pub mod serialized;
 pub mod text;
 pub mod toml;
 pub mod xml;
 
-pub use desc::{GeometryDesc, SceneDesc, ShapeDesc};
+pub use desc::{GeometryDesc, GroupDesc, InstanceDesc, SceneDesc, ShapeDesc};
 pub use error::SceneError;
 
 use crate::accel::{ShadowPacket, WideBvh, PACKET};
 use crate::camera::CameraDesc;
 use crate::geometry::ray::{offset_ray_origin, SHADOW_EPSILON};
 use crate::geometry::{Ray, Sphere, Triangle};
-use crate::light::Lights;
+use crate::light::{Lights, NO_TEXTURE};
 use crate::material::Material;
 use glam::{Vec2, Vec3A, Vec4};
 
@@ -101,6 +104,29 @@ impl Interaction {
     }
 }
 
+/// A sphere's frame: its rotation from the world into its local axes, where its texture
+/// coordinates are measured (None: the world's), and whether its normals point inwards
+/// (Mitsuba's `flip_normals`).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct SphereFrame {
+    pub(crate) to_local: Option<glam::Mat3A>,
+    pub(crate) flip: bool,
+}
+
+impl SphereFrame {
+    /// A world direction in the sphere's local axes.
+    #[inline]
+    pub(crate) fn local(&self, d: Vec3A) -> Vec3A {
+        self.to_local.map_or(d, |m| m * d)
+    }
+
+    /// A local direction in world axes.
+    #[inline]
+    pub(crate) fn world(&self, d: Vec3A) -> Vec3A {
+        self.to_local.map_or(d, |m| m.transpose() * d)
+    }
+}
+
 pub struct Scene {
     /// Per primitive, in BVH order: a triangle's three indices into `positions`, or
     /// `[SPHERE, index into spheres, 0]`.
@@ -110,6 +136,8 @@ pub struct Scene {
     /// Vertex positions of all meshes, one after the other, and one padding vertex.
     pub(crate) positions: Vec<glam::Vec3>,
     pub(crate) spheres: Vec<Sphere>,
+    /// Per sphere (as `spheres`), its own frame and orientation.
+    pub(crate) sphere_frames: Vec<SphereFrame>,
     /// (primitive, area light) of each emitting primitive, by primitive.
     pub(crate) emitters: Vec<(u32, u32)>,
     /// Vertex normals and texture coordinates of the meshes that have them (a triangle's face
@@ -133,6 +161,8 @@ pub struct Scene {
     pub(crate) masked: bool,
     /// How long each phase of `Scene::build` took.
     pub build_times: crate::accel::BuildTimes,
+    /// Shape groups, each stored once, and their instances (None without any).
+    pub(crate) instances: Option<Box<instance::Instances>>,
 }
 
 impl Scene {
@@ -190,29 +220,43 @@ impl Scene {
     /// Closest hit along the ray, if any.
     #[inline(always)]
     pub fn intersect(&self, ray: &Ray) -> Option<Interaction> {
+        let hit = self.closest(ray, f32::INFINITY);
+        if let Some(inst) = &self.instances {
+            return inst.intersect(self, ray, hit);
+        }
+        let (i, u, v, t) = hit?;
+        Some(self.interaction(ray, i, u, v, t))
+    }
+
+    /// The closest of this scene's own primitives (not its instances) hit before `t_max`
+    /// (or at it), and seen (through masks): (primitive, u, v, t).
+    #[inline(always)]
+    fn closest(&self, ray: &Ray, t_max: f32) -> Option<(usize, f32, f32, f32)> {
         if self.masked {
-            return self.closest(ray, |i, u, v, t| self.seen(ray, i, u, v, t));
+            return self.closest_kept(ray, t_max, |i, u, v, t| self.seen(ray, i, u, v, t));
         }
         #[cfg(target_arch = "x86_64")]
         if let Some(f) = &self.flat {
             let (i, t, u, v) = f.intersect(
                 ray,
-                f32::INFINITY,
+                t_max,
                 #[inline(always)]
                 |i, t_max| self.hit(ray, i, t_max),
             )?;
-            return Some(self.interaction(ray, i, u, v, t));
+            return Some((i, u, v, t));
         }
-        self.closest(ray, |_, _, _, _| true)
+        self.closest_kept(ray, t_max, |_, _, _, _| true)
     }
 
-    /// The closest hit through the BVH of those `keep` keeps (given the primitive, u, v, t).
+    /// [`Scene::closest`] through the BVH, of the hits `keep` keeps (given the primitive,
+    /// u, v, t).
     #[inline(always)]
-    fn closest(
+    fn closest_kept(
         &self,
         ray: &Ray,
+        t_max: f32,
         keep: impl Fn(usize, f32, f32, f32) -> bool,
-    ) -> Option<Interaction> {
+    ) -> Option<(usize, f32, f32, f32)> {
         // Of equally near hits the lowest primitive, whatever the order the traversal
         // visits them in (as `accel::flat` finds them): a primitive is tested without a
         // bound (its tests read `t_max` only to accept their answer), and its hit kept if
@@ -220,7 +264,7 @@ impl Scene {
         let mut best = (usize::MAX, 0.0f32, 0.0f32, 0.0f32);
         let found = self.bvh.intersect(
             ray,
-            f32::INFINITY,
+            t_max,
             #[inline(always)]
             |i, t_max| {
                 let (t, u, v) = self.hit(ray, i, f32::INFINITY)?;
@@ -230,11 +274,7 @@ impl Scene {
                 })
             },
         );
-        if !found {
-            return None;
-        }
-        let (i, u, v, t) = best;
-        Some(self.interaction(ray, i, u, v, t))
+        found.then_some(best)
     }
 
     #[inline(always)]
@@ -293,14 +333,19 @@ impl Scene {
             si
         } else {
             let s = &self.spheres[idx[1] as usize];
+            let frame = &self.sphere_frames[idx[1] as usize];
             let (p, n, p_err) = s.surface_point(ray.at(t_hit));
-            // The angles only where a texture reads them (an arctangent and an arccosine).
+            // The angles only where a texture reads them (an arctangent and an arccosine),
+            // in the sphere's own frame (Mitsuba's sphere.cpp).
             let mat = &self.materials[material as usize];
-            let uv = if mat.reads_uv() {
-                sphere_uv(n)
+            let uv = if mat.reads_uv()
+                || (light != NO_LIGHT && self.lights.lights[light as usize].texture != NO_TEXTURE)
+            {
+                sphere_uv(frame.local(n))
             } else {
                 Vec2::ZERO
             };
+            let n = if frame.flip { -n } else { n };
             let mut si = Interaction {
                 p,
                 p_err,
@@ -313,7 +358,7 @@ impl Scene {
                 light,
             };
             if mat.perturbs() {
-                self.perturb_sphere(&mut si, ray, s.radius);
+                self.perturb_sphere(&mut si, ray, s.radius, frame);
             }
             si
         }
@@ -335,6 +380,13 @@ impl Scene {
     /// True if anything blocks the ray before parametric distance `t_max`.
     #[inline(always)]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        self.occluded_prims(ray, t_max)
+            || (self.instances.as_ref()).is_some_and(|inst| inst.occluded(ray, t_max))
+    }
+
+    /// [`Scene::occluded`] by this scene's own primitives (not its instances).
+    #[inline(always)]
+    fn occluded_prims(&self, ray: &Ray, t_max: f32) -> bool {
         if self.masked {
             return self.bvh.occluded(ray, t_max, |i, t_max| {
                 self.hit(ray, i, t_max)
@@ -362,16 +414,28 @@ impl Scene {
     /// [`Scene::occluded`] for each, in one traversal.
     #[inline]
     pub fn occluded_packet(&self, pk: &ShadowPacket, active: u32) -> u32 {
-        self.bvh
-            .occluded_packet(pk, active, |i, lanes| self.packet_hits(pk, i, lanes))
+        let hits = self
+            .bvh
+            .occluded_packet(pk, active, |i, lanes| self.packet_hits(pk, i, lanes));
+        match &self.instances {
+            Some(inst) if hits != active => hits | inst.occluded_packet(pk, active & !hits),
+            _ => hits,
+        }
     }
 
     /// [`Scene::occluded_packet`] without AVX-512, where the CPU has AVX (`None` where it
     /// has not), for the tests to compare both packet traversals with single rays.
     #[doc(hidden)]
     pub fn occluded_packet_avx(&self, pk: &ShadowPacket, active: u32) -> Option<u32> {
-        self.bvh
-            .occluded_packet_avx(pk, active, |i, lanes| self.packet_hits(pk, i, lanes))
+        let hits = self
+            .bvh
+            .occluded_packet_avx(pk, active, |i, lanes| self.packet_hits(pk, i, lanes))?;
+        match &self.instances {
+            Some(inst) if hits != active => {
+                Some(hits | inst.occluded_packet_avx(pk, active & !hits)?)
+            }
+            _ => Some(hits),
+        }
     }
 
     /// The lanes of `lanes` whose rays primitive `i` blocks.
@@ -438,13 +502,20 @@ impl Scene {
 
     /// Bytes held by the geometry the integrators trace: per-primitive indices and
     /// materials, vertex positions, normals and texture coordinates, spheres, the emitter
-    /// table and BVH nodes (not materials, textures or lights).
+    /// table and BVH nodes (not materials, textures or lights); with instances, each
+    /// group's once and the instances' own ([`instance::Instances::memory_bytes`]).
     pub fn memory_bytes(&self) -> usize {
+        self.own_memory_bytes() + self.instances.as_ref().map_or(0, |i| i.memory_bytes())
+    }
+
+    /// [`Scene::memory_bytes`] of this scene's own primitives (not its instances).
+    fn own_memory_bytes(&self) -> usize {
         use std::mem::size_of_val;
         size_of_val(&self.tris[..])
             + size_of_val(&self.meta[..])
             + size_of_val(&self.positions[..])
             + size_of_val(&self.spheres[..])
+            + size_of_val(&self.sphere_frames[..])
             + size_of_val(&self.emitters[..])
             + size_of_val(&self.normals[..])
             + size_of_val(&self.uvs[..])
@@ -496,19 +567,18 @@ impl Scene {
         self
     }
 
-    /// The material at a hit, its texture (if any) evaluated there.
+    /// The material at a hit: its textured parameters evaluated there, a blend resolved
+    /// ([`Material::at`]).
     #[inline]
     pub fn material_at(&self, si: &Interaction) -> Material {
-        let mut m = self.materials[si.material as usize];
-        if let Some(t) = m.texture {
-            m = m.with_color(self.textures[t as usize].eval(si.uv));
-        }
+        let m = &self.materials[si.material as usize];
+        let mut hit = m.at(&self.materials, &self.textures, si.uv);
         if m.perturbs() {
-            m.perturbed = Some(crate::material::normal_map::Perturbed::new(
+            hit.perturbed = Some(crate::material::normal_map::Perturbed::new(
                 si.ns, si.ns_base,
             ));
         }
-        m
+        hit
     }
 
     /// The mesh texture coordinates of triangle `idx`'s vertices, if its mesh has them
@@ -528,27 +598,33 @@ impl Scene {
         }
     }
 
-    /// Primitives: triangles and spheres.
+    /// Primitives stored: triangles and spheres, each group's once (however many
+    /// instances place it).
     pub fn prim_count(&self) -> usize {
-        self.tris.len()
+        self.tris.len() + self.instances.as_ref().map_or(0, |i| i.stored_prims())
     }
 
+    /// Triangles stored, each group's once.
     pub fn triangle_count(&self) -> usize {
         self.tris.len() - self.spheres.len()
+            + self.instances.as_ref().map_or(0, |i| i.stored_triangles())
+    }
+
+    /// The bounds of everything the scene holds, instances included (None if empty).
+    pub fn bounds(&self) -> Option<crate::geometry::Aabb> {
+        instance::union(
+            self.bvh.bounds(),
+            self.instances.as_ref().and_then(|i| i.bounds()),
+        )
+    }
+
+    /// A line on the scene's instancing for the render summary (None without instances).
+    pub fn instancing_summary(&self) -> Option<String> {
+        self.instances
+            .as_ref()
+            .map(|i| i.summary(self.own_memory_bytes()))
     }
 }
 
 /// Texture coordinates on a sphere at unit normal `n` (Mitsuba's): (φ/2π, θ/π).
-#[inline]
-fn sphere_uv(n: Vec3A) -> Vec2 {
-    let phi = n.y.atan2(n.x);
-    let phi = if phi < 0.0 {
-        phi + std::f32::consts::TAU
-    } else {
-        phi
-    };
-    Vec2::new(
-        phi / std::f32::consts::TAU,
-        n.z.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
-    )
-}
+pub(crate) use crate::geometry::sphere::uv_of_normal as sphere_uv;

@@ -26,8 +26,18 @@ impl Scene {
 
     /// Perturbs the shading normal of `si`, a hit of a sphere of radius `radius`.
     #[cold]
-    pub(super) fn perturb_sphere(&self, si: &mut Interaction, ray: &Ray, radius: f32) {
-        let (dpdu, dpdv) = sphere_partials(si.ng, radius);
+    /// The partials are those of its texture coordinates, in its own frame (`frame`), taken
+    /// at its outward normal.
+    pub(super) fn perturb_sphere(
+        &self,
+        si: &mut Interaction,
+        ray: &Ray,
+        radius: f32,
+        frame: &super::SphereFrame,
+    ) {
+        let outward = if frame.flip { -si.ng } else { si.ng };
+        let (dpdu, dpdv) = sphere_partials(frame.local(outward), radius);
+        let (dpdu, dpdv) = (frame.world(dpdu), frame.world(dpdv));
         self.perturb(si, ray, dpdu, dpdv);
     }
 
@@ -48,7 +58,11 @@ impl Scene {
 /// dp/du and dp/dv of a triangle: from its texture coordinates where given and not
 /// degenerate (an arbitrary basis around `n` where degenerate), else of its barycentric
 /// parametrization (edges p1 − p0 and p2 − p0), as Mitsuba's meshes.
-pub(crate) fn triangle_partials(tri: &Triangle, uvs: Option<[Vec2; 3]>, n: Vec3A) -> (Vec3A, Vec3A) {
+pub(crate) fn triangle_partials(
+    tri: &Triangle,
+    uvs: Option<[Vec2; 3]>,
+    n: Vec3A,
+) -> (Vec3A, Vec3A) {
     let (e1, e2) = (tri.p1 - tri.p0, tri.p2 - tri.p0);
     let Some([t0, t1, t2]) = uvs else {
         return (e1, e2);
@@ -60,10 +74,7 @@ pub(crate) fn triangle_partials(tri: &Triangle, uvs: Option<[Vec2; 3]>, n: Vec3A
         return (f.s, f.t);
     }
     let inv = 1.0 / det;
-    (
-        (e1 * d1.y - e2 * d0.y) * inv,
-        (e2 * d0.x - e1 * d1.x) * inv,
-    )
+    ((e1 * d1.y - e2 * d0.y) * inv, (e2 * d0.x - e1 * d1.x) * inv)
 }
 
 /// dp/du and dp/dv of a sphere of radius `r` at unit normal `n`, for u = φ/2π and v = θ/π.
@@ -92,11 +103,17 @@ mod tests {
         // u along x over 2 units, v along y over 4: dp/du = (2, 0, 0), dp/dv = (0, 4, 0).
         let uvs = [Vec2::ZERO, Vec2::X, Vec2::Y];
         let (du, dv) = triangle_partials(&tri, Some(uvs), Vec3A::Z);
-        assert_eq!((du, dv), (Vec3A::new(2.0, 0.0, 0.0), Vec3A::new(0.0, 4.0, 0.0)));
+        assert_eq!(
+            (du, dv),
+            (Vec3A::new(2.0, 0.0, 0.0), Vec3A::new(0.0, 4.0, 0.0))
+        );
         // Swapped coordinates swap the partials.
         let uvs = [Vec2::ZERO, Vec2::Y, Vec2::X];
         let (du, dv) = triangle_partials(&tri, Some(uvs), Vec3A::Z);
-        assert_eq!((du, dv), (Vec3A::new(0.0, 4.0, 0.0), Vec3A::new(2.0, 0.0, 0.0)));
+        assert_eq!(
+            (du, dv),
+            (Vec3A::new(0.0, 4.0, 0.0), Vec3A::new(2.0, 0.0, 0.0))
+        );
         let (du, dv) = triangle_partials(&tri, None, Vec3A::Z);
         assert_eq!((du, dv), (tri.p1 - tri.p0, tri.p2 - tri.p0));
     }

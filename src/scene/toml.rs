@@ -10,9 +10,11 @@ use crate::camera::{CameraDesc, FovAxis};
 use crate::geometry::mesh::TriangleMesh;
 use crate::integrator::IntegratorKind;
 use crate::material::conductor::{conductor_ior, conductor_names};
+use crate::material::textured::slots::{self, MAIN_COLOR};
 use crate::material::{
-    Bsdf, Conductor, Dielectric, Lambert, Material, Microfacet, MicrofacetType, Mirror, OrenNayar,
-    Plastic, RoughConductor, RoughDielectric, RoughPlastic, ThinDielectric,
+    Binding, Blend, Bsdf, Conductor, Dielectric, Lambert, Material, Microfacet, MicrofacetType,
+    Mirror, OrenNayar, Plastic, RoughConductor, RoughDielectric, RoughPlastic, Slot,
+    ThinDielectric, MAX_BLEND_DEPTH,
 };
 use crate::texture::{Bitmap, BitmapTexture, FilterType, Texture, UvTransform, WrapMode};
 use crate::Color;
@@ -23,7 +25,12 @@ use std::path::Path;
 use std::sync::Arc;
 use toml::Spanned;
 
+mod instance;
+
 type V3 = [f32; 3];
+
+#[path = "toml_principled.rs"]
+mod principled;
 
 /// A colour: one number (grey) or three (linear RGB); where a material's main colour is
 /// expected, also the name of a `[texture.NAME]`.
@@ -48,6 +55,14 @@ impl ColorT {
     }
 }
 
+/// A float parameter: a number, or the name of a texture read as a float (its luminance).
+#[derive(Deserialize, Clone)]
+#[serde(untagged, expecting = "expected a number or the name of a texture")]
+enum FloatT {
+    Num(f32),
+    Texture(String),
+}
+
 /// The textures defined in the file: names and indices into `SceneDesc::textures`.
 struct Textures<'a> {
     ids: BTreeMap<&'a str, u32>,
@@ -68,6 +83,8 @@ struct FileT {
     shape: Vec<Spanned<ShapeT>>,
     #[serde(default)]
     light: Vec<Spanned<LightT>>,
+    #[serde(default)]
+    instance: Vec<Spanned<instance::InstanceT>>,
 }
 
 #[derive(Deserialize)]
@@ -122,12 +139,27 @@ struct MaterialT {
     material: Option<Spanned<String>>,
     eta: Option<Spanned<ColorT>>,
     k: Option<Spanned<ColorT>>,
-    alpha: Option<Spanned<f32>>,
-    alpha_u: Option<Spanned<f32>>,
-    alpha_v: Option<Spanned<f32>>,
+    alpha: Option<Spanned<FloatT>>,
+    alpha_u: Option<Spanned<FloatT>>,
+    alpha_v: Option<Spanned<FloatT>>,
     distribution: Option<Spanned<String>>,
+    weight: Option<Spanned<FloatT>>,
+    materials: Option<Spanned<Vec<String>>>,
     nonlinear: Option<Spanned<bool>>,
     two_sided: Option<Spanned<bool>>,
+    // `principled` and `principledthin` (toml_principled.rs), with `eta` and `specular`.
+    base_color: Option<Spanned<ColorT>>,
+    roughness: Option<Spanned<f32>>,
+    anisotropic: Option<Spanned<f32>>,
+    metallic: Option<Spanned<f32>>,
+    spec_trans: Option<Spanned<f32>>,
+    spec_tint: Option<Spanned<f32>>,
+    sheen: Option<Spanned<f32>>,
+    sheen_tint: Option<Spanned<f32>>,
+    flatness: Option<Spanned<f32>>,
+    clearcoat: Option<Spanned<f32>>,
+    clearcoat_gloss: Option<Spanned<f32>>,
+    diff_trans: Option<Spanned<f32>>,
 }
 
 #[derive(Deserialize)]
@@ -175,12 +207,16 @@ struct ShapeT {
     center: Option<Spanned<V3>>,
     radius: Option<Spanned<f32>>,
     normal: Option<Spanned<V3>>,
+    p0: Option<Spanned<V3>>,
+    p1: Option<Spanned<V3>>,
     file: Option<Spanned<String>>,
     positions: Option<Spanned<Vec<V3>>>,
     indices: Option<Spanned<Vec<[u32; 3]>>>,
     normals: Option<Spanned<Vec<V3>>>,
     uvs: Option<Spanned<Vec<[f32; 2]>>>,
     smooth: Option<Spanned<bool>>,
+    /// The shape group the shape belongs to, instead of the scene.
+    group: Option<Spanned<String>>,
 }
 
 /// Error helper bound to one file's text.
@@ -306,13 +342,15 @@ impl Ctx<'_> {
         }
     }
 
-    /// GGX roughness: `alpha` (default 0.1), or `alpha_u` and `alpha_v`.
     /// The microfacet distribution: `distribution` ("ggx", the default, or "beckmann") and
-    /// `alpha` or `alpha_u` and `alpha_v`.
+    /// `alpha` or `alpha_u` and `alpha_v`, each a number or (where `slots` is given) a
+    /// texture read as a float.
     fn roughness(
         &self,
         t: &MaterialT,
         at: &std::ops::Range<usize>,
+        tex: &Textures,
+        mut slots: Option<&mut Vec<Binding>>,
     ) -> Result<Microfacet, SceneError> {
         let kind = match &t.distribution {
             None => MicrofacetType::Ggx,
@@ -329,9 +367,23 @@ impl Ctx<'_> {
                 }
             },
         };
-        let check = |v: &Spanned<f32>, key: &str| {
-            if v.get_ref().is_finite() && *v.get_ref() > 0.0 {
-                Ok(*v.get_ref())
+        let mut check = |v: &Spanned<FloatT>, key: &str, slot: Slot| {
+            let value = match (v.get_ref(), slots.as_deref_mut()) {
+                (FloatT::Num(x), _) => *x,
+                (FloatT::Texture(name), Some(slots)) => {
+                    let i = self.texture_id(v.span(), name, key, tex)?;
+                    slots.push(Binding { texture: i, slot });
+                    return Ok(tex.list[i as usize].mean_1().max(1e-4));
+                }
+                (FloatT::Texture(_), None) => {
+                    return self.err(
+                        v.span(),
+                        format!("'{key}' of a roughplastic cannot be a texture (its coating is tabulated for one roughness); give a number"),
+                    )
+                }
+            };
+            if value.is_finite() && value > 0.0 {
+                Ok(value)
             } else {
                 self.err(
                     v.span(),
@@ -341,11 +393,14 @@ impl Ctx<'_> {
         };
         let (au, av) = match (&t.alpha, &t.alpha_u, &t.alpha_v) {
             (Some(a), None, None) => {
-                let a = check(a, "alpha")?;
+                let a = check(a, "alpha", slots::ALPHA)?;
                 (a, a)
             }
             (None, None, None) => (0.1, 0.1),
-            (None, Some(u), Some(v)) => (check(u, "alpha_u")?, check(v, "alpha_v")?),
+            (None, Some(u), Some(v)) => (
+                check(u, "alpha_u", slots::ALPHA_U)?,
+                check(v, "alpha_v", slots::ALPHA_V)?,
+            ),
             (Some(a), _, _) => {
                 return self.err(
                     a.span(),
@@ -360,6 +415,31 @@ impl Ctx<'_> {
             }
         };
         Ok(Microfacet::new(kind, au, av))
+    }
+
+    /// The index of texture `name` (for the parameter `key`), or an error listing those
+    /// defined.
+    fn texture_id(
+        &self,
+        span: std::ops::Range<usize>,
+        name: &str,
+        key: &str,
+        tex: &Textures,
+    ) -> Result<u32, SceneError> {
+        match tex.ids.get(name) {
+            Some(&i) => Ok(i),
+            None => {
+                let known: Vec<&str> = tex.ids.keys().copied().collect();
+                self.err(
+                    span,
+                    format!(
+                        "unknown texture '{}' in '{key}' (defined: {}); give a number or the name of a [texture.NAME]",
+                        crate::input::shorten(name),
+                        list_or_none(&known)
+                    ),
+                )
+            }
+        }
     }
 }
 
@@ -625,15 +705,18 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
             .collect(),
         list: &desc.textures,
     };
-    let mut materials = Vec::new();
+    // Materials in the order of their names (a blend names its parts).
+    let material_ids: BTreeMap<&str, u32> = file
+        .material
+        .keys()
+        .enumerate()
+        .map(|(i, n)| (n.as_str(), i as u32))
+        .collect();
     for m in file.material.values() {
-        materials.push(material(&cx, m, &tex)?);
-    }
-    let mut material_ids: BTreeMap<&str, u32> = BTreeMap::new();
-    for (name, mat) in file.material.keys().zip(materials) {
-        material_ids.insert(name.as_str(), desc.materials.len() as u32);
+        let mat = material(&cx, m, &tex, &material_ids)?;
         desc.materials.push(mat);
     }
+    check_blends(&cx, &file.material, &desc.materials)?;
     // Shapes without a material (lights, usually) reflect nothing.
     let mut black: Option<u32> = None;
 
@@ -660,16 +743,24 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                 (desc.materials.len() - 1) as u32
             }),
         };
-        let emission = s
-            .emission
-            .as_ref()
-            .map(|e| cx.color(e, "emission", None))
-            .transpose()?;
+        let emission = match &s.emission {
+            Some(e) => Some(match e.get_ref() {
+                ColorT::Texture(name) => {
+                    let i = cx.texture_id(e.span(), name, "emission", &tex)?;
+                    desc.emission_textures.push((desc.shapes.len(), i));
+                    tex.list[i as usize].mean()
+                }
+                _ => cx.color(e, "emission", None)?,
+            }),
+            None => None,
+        };
         let present = [
             ("vertices", span_of(&s.vertices)),
             ("center", span_of(&s.center)),
             ("radius", span_of(&s.radius)),
             ("normal", span_of(&s.normal)),
+            ("p0", span_of(&s.p0)),
+            ("p1", span_of(&s.p1)),
             ("file", span_of(&s.file)),
             ("positions", span_of(&s.positions)),
             ("indices", span_of(&s.indices)),
@@ -746,6 +837,18 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                 disk.transform(&m);
                 GeometryDesc::Mesh(disk)
             }
+            "cylinder" => {
+                let what = "a cylinder";
+                cx.only(&present, &["p0", "p1", "radius"], what)?;
+                let p0 = cx.finite3(cx.need(&s.p0, "p0", what, &at)?, "p0")?;
+                let p1 = cx.finite3(cx.need(&s.p1, "p1", what, &at)?, "p1")?;
+                let r = cx.need(&s.radius, "radius", what, &at)?;
+                let m = crate::scene::cylinder::cylinder_transform(Mat4::IDENTITY, p0, p1, *r.get_ref())
+                    .or_else(|why| cx.err(at.clone(), why))?;
+                let mut mesh = crate::scene::cylinder::unit_cylinder();
+                mesh.transform(&m);
+                GeometryDesc::Mesh(mesh)
+            }
             "mesh" => {
                 cx.only(
                     &present,
@@ -766,11 +869,12 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                             .and_then(|e| e.to_str())
                             .unwrap_or("")
                             .to_ascii_lowercase();
-                        if ext != "obj" && ext != "ply" {
+                        if ext != "obj" && ext != "ply" && ext != "serialized" {
                             return cx.err(
                                 f.span(),
                                 format!(
-                                    "unsupported mesh file '{}' (expected an .obj or .ply file)",
+                                    "unsupported mesh file '{}' (expected an .obj or .ply file, \
+                                     or Mitsuba's .serialized)",
                                     f.get_ref()
                                 ),
                             );
@@ -789,8 +893,11 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                             let mut m = load_obj(&p)?;
                             m.flip_v();
                             m
-                        } else {
+                        } else if ext == "ply" {
                             load_ply(&p)?.into_triangle_mesh()
+                        } else {
+                            // The file's first mesh (Mitsuba's default shape_index).
+                            crate::scene::serialized::load_serialized(&p, 0)?
                         };
                         match s.smooth.as_ref().map(|v| *v.get_ref()) {
                             Some(true) if m.normals.is_none() => m.recompute_vertex_normals(),
@@ -879,7 +986,7 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                 return cx.err(
                     s.kind.span(),
                     format!(
-                    "unknown shape type '{other}' (expected triangle, quad, sphere, disk or mesh)"
+                    "unknown shape type '{other}' (expected triangle, quad, sphere, disk, cylinder or mesh)"
                 ),
                 )
             }
@@ -897,12 +1004,20 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                 return cx.err(e.span(), "an emitting shape must have a positive area");
             }
         }
-        desc.shapes.push(ShapeDesc {
+        let shape = ShapeDesc {
             geometry,
             material,
             emission,
-        });
+        };
+        instance::add_shape(
+            &cx,
+            &mut desc.shapes,
+            &mut desc.groups,
+            s.group.as_ref(),
+            shape,
+        )?;
     }
+    desc.instances = instance::instances(&cx, &desc.groups, &file.instance)?;
     for light in &file.light {
         desc.lights.push(light_desc(&cx, light, &tex, base)?);
     }
@@ -1020,7 +1135,12 @@ fn settings(cx: &Ctx, r: &RenderT) -> Result<FileSettings, SceneError> {
     })
 }
 
-fn material(cx: &Ctx, m: &Spanned<MaterialT>, tex: &Textures) -> Result<Material, SceneError> {
+fn material(
+    cx: &Ctx,
+    m: &Spanned<MaterialT>,
+    tex: &Textures,
+    ids: &BTreeMap<&str, u32>,
+) -> Result<Material, SceneError> {
     let t = m.get_ref();
     let at = m.span();
     let present = [
@@ -1039,9 +1159,27 @@ fn material(cx: &Ctx, m: &Spanned<MaterialT>, tex: &Textures) -> Result<Material
         ("distribution", span_of(&t.distribution)),
         ("nonlinear", span_of(&t.nonlinear)),
         ("two_sided", span_of(&t.two_sided)),
+        ("base_color", span_of(&t.base_color)),
+        ("roughness", span_of(&t.roughness)),
+        ("anisotropic", span_of(&t.anisotropic)),
+        ("metallic", span_of(&t.metallic)),
+        ("spec_trans", span_of(&t.spec_trans)),
+        ("spec_tint", span_of(&t.spec_tint)),
+        ("sheen", span_of(&t.sheen)),
+        ("sheen_tint", span_of(&t.sheen_tint)),
+        ("flatness", span_of(&t.flatness)),
+        ("clearcoat", span_of(&t.clearcoat)),
+        ("clearcoat_gloss", span_of(&t.clearcoat_gloss)),
+        ("diff_trans", span_of(&t.diff_trans)),
+        ("weight", span_of(&t.weight)),
+        ("materials", span_of(&t.materials)),
     ];
-    let two_sided = t.two_sided.as_ref().is_none_or(|v| *v.get_ref());
     let kind = t.kind.get_ref().as_str();
+    // Two-sided by default, except the principled BSDFs, which have back sides of their own.
+    let two_sided = t
+        .two_sided
+        .as_ref()
+        .map_or(!kind.starts_with("principled"), |v| *v.get_ref());
     let what = format!(
         "{} {kind} material",
         if kind.starts_with(['a', 'e', 'i', 'o', 'u']) {
@@ -1060,7 +1198,12 @@ fn material(cx: &Ctx, m: &Spanned<MaterialT>, tex: &Textures) -> Result<Material
         Ok(cx.ior(&t.ior, "ior", default)? / cx.ior(&t.ext_ior, "ext_ior", 1.0)?)
     };
     let mut texture = None;
+    let mut bindings = Vec::new();
     let bsdf = match kind {
+        "blend" => {
+            cx.only(&present, &["weight", "materials", "two_sided"], &what)?;
+            blend(cx, t, &at, tex, ids, &mut bindings)?
+        }
         "lambert" => {
             cx.only(&present, &["albedo", "two_sided"], &what)?;
             let (albedo, tx) = main(&t.albedo, "albedo", None)?;
@@ -1086,7 +1229,7 @@ fn material(cx: &Ctx, m: &Spanned<MaterialT>, tex: &Textures) -> Result<Material
         "dielectric" => {
             cx.only(&present, &["ior", "ext_ior"], &what)?;
             cx.need(&t.ior, "ior", &what, &at)?;
-            Bsdf::Dielectric(Dielectric { eta: eta_of(1.5046)? })
+            Bsdf::Dielectric(Dielectric::new(eta_of(1.5046)?))
         }
         "thindielectric" => {
             cx.only(&present, &["ior", "ext_ior"], &what)?;
@@ -1094,7 +1237,8 @@ fn material(cx: &Ctx, m: &Spanned<MaterialT>, tex: &Textures) -> Result<Material
         }
         "roughdielectric" => {
             cx.only(&present, &["ior", "ext_ior", "alpha", "alpha_u", "alpha_v", "distribution"], &what)?;
-            Bsdf::RoughDielectric(RoughDielectric::new(cx.roughness(t, &at)?, eta_of(1.5046)?))
+            let distr = cx.roughness(t, &at, tex, Some(&mut bindings))?;
+            Bsdf::RoughDielectric(RoughDielectric::new(distr, eta_of(1.5046)?))
         }
         "conductor" | "roughconductor" => {
             let rough = kind == "roughconductor";
@@ -1130,7 +1274,8 @@ fn material(cx: &Ctx, m: &Spanned<MaterialT>, tex: &Textures) -> Result<Material
             let (r, tx) = main(&t.reflectance, "reflectance", Some(1.0))?;
             texture = tx;
             if rough {
-                Bsdf::RoughConductor(RoughConductor::new(cx.roughness(t, &at)?, eta, k, r))
+                let distr = cx.roughness(t, &at, tex, Some(&mut bindings))?;
+                Bsdf::RoughConductor(RoughConductor::new(distr, eta, k, r))
             } else if eta == Color::ZERO && k == Color::ONE {
                 // material = "none": a perfect mirror (as Mitsuba's conductor).
                 Bsdf::Mirror(Mirror { reflectance: r })
@@ -1147,11 +1292,15 @@ fn material(cx: &Ctx, m: &Spanned<MaterialT>, tex: &Textures) -> Result<Material
             cx.only(&present, &keys, &what)?;
             let (d, tx) = main(&t.albedo, "albedo", Some(0.5))?;
             texture = tx;
-            let spec = t.specular.as_ref().map(|v| cx.color(v, "specular", Some(1.0))).transpose()?.unwrap_or(Color::ONE);
+            let (spec, spec_tx) = main(&t.specular, "specular", Some(1.0))?;
+            bindings.extend(spec_tx.map(|texture| Binding {
+                texture,
+                slot: slots::PLASTIC_SPECULAR,
+            }));
             let nonlinear = t.nonlinear.as_ref().is_some_and(|v| *v.get_ref());
             let eta = eta_of(1.49)?;
             if rough {
-                let distr = cx.roughness(t, &at)?;
+                let distr = cx.roughness(t, &at, tex, None)?;
                 Bsdf::RoughPlastic(RoughPlastic::new(distr.kind, distr.alpha_u, eta, d, spec, nonlinear))
             } else {
                 Bsdf::Plastic(Plastic::new(eta, d, spec, nonlinear))
@@ -1161,11 +1310,111 @@ fn material(cx: &Ctx, m: &Spanned<MaterialT>, tex: &Textures) -> Result<Material
             cx.only(&present, &[], &what)?;
             Bsdf::Black
         }
-        other => return cx.err(t.kind.span(), format!("unknown material type '{other}' (expected lambert, oren_nayar, mirror, dielectric, thindielectric, roughdielectric, conductor, roughconductor, plastic, roughplastic or black)")),
+        "principled" | "principledthin" => principled::bsdf(cx, t, kind, &present, &what, tex, &mut texture)?,
+        other => return cx.err(t.kind.span(), format!("unknown material type '{other}' (expected lambert, oren_nayar, mirror, dielectric, thindielectric, roughdielectric, conductor, roughconductor, plastic, roughplastic, principled, principledthin, blend or black)")),
     };
-    let mut m = Material::new(bsdf, two_sided);
-    m.texture = texture;
-    Ok(m)
+    bindings.extend(texture.map(|texture| Binding {
+        texture,
+        slot: MAIN_COLOR,
+    }));
+    Ok(Material::new(bsdf, two_sided).with_slots(bindings))
+}
+
+/// A `blend` material: `weight` (a number in [0, 1] or a texture) of the second of its two
+/// `materials` (names), 1 − weight of the first.
+fn blend(
+    cx: &Ctx,
+    t: &MaterialT,
+    at: &std::ops::Range<usize>,
+    tex: &Textures,
+    ids: &BTreeMap<&str, u32>,
+    bindings: &mut Vec<Binding>,
+) -> Result<Bsdf, SceneError> {
+    let what = "a blend material";
+    let names = cx.need(&t.materials, "materials", what, at)?;
+    let [first, second] = names.get_ref().as_slice() else {
+        return cx.err(
+            names.span(),
+            format!(
+                "a blend mixes exactly two materials, ['first', 'second']; found {}",
+                names.get_ref().len()
+            ),
+        );
+    };
+    let id = |name: &String| match ids.get(name.as_str()) {
+        Some(&i) => Ok(i),
+        None => {
+            let known: Vec<&str> = ids.keys().copied().collect();
+            cx.err(
+                names.span(),
+                format!(
+                    "unknown material '{}' in 'materials' (defined: {})",
+                    crate::input::shorten(name),
+                    list_or_none(&known)
+                ),
+            )
+        }
+    };
+    let (first, second) = (id(first)?, id(second)?);
+    let w = cx.need(&t.weight, "weight", what, at)?;
+    let weight = match w.get_ref() {
+        FloatT::Num(x) if (0.0..=1.0).contains(x) => *x,
+        FloatT::Num(x) => {
+            return cx.err(
+                w.span(),
+                format!("'weight' must be between 0 and 1, got {x}"),
+            )
+        }
+        FloatT::Texture(name) => {
+            let i = cx.texture_id(w.span(), name, "weight", tex)?;
+            bindings.push(Binding {
+                texture: i,
+                slot: crate::slot!(Float, Blend, |b, v| b.weight = v),
+            });
+            tex.list[i as usize].mean_1()
+        }
+    };
+    Ok(Bsdf::Blend(Blend {
+        weight,
+        first,
+        second,
+    }))
+}
+
+/// Blends nest at most [`MAX_BLEND_DEPTH`] deep, and none contains itself.
+fn check_blends(
+    cx: &Ctx,
+    named: &BTreeMap<String, Spanned<MaterialT>>,
+    materials: &[Material],
+) -> Result<(), SceneError> {
+    // Depth of material i, or None beyond the bound (which a cycle always is).
+    fn depth(materials: &[Material], i: u32, level: u32) -> Option<u32> {
+        if level > MAX_BLEND_DEPTH {
+            return None;
+        }
+        match materials[i as usize].bsdf {
+            Bsdf::Blend(b) => {
+                let d = depth(materials, b.first, level + 1)?.max(depth(
+                    materials,
+                    b.second,
+                    level + 1,
+                )?);
+                Some(d + 1)
+            }
+            _ => Some(0),
+        }
+    }
+    for (i, m) in named.values().enumerate() {
+        if depth(materials, i as u32, 0).is_none_or(|d| d > MAX_BLEND_DEPTH) {
+            return cx.err(
+                m.span(),
+                format!(
+                    "this blend nests blends more than {MAX_BLEND_DEPTH} deep, or contains itself"
+                ),
+            );
+        }
+    }
+    Ok(())
 }
 
 fn texture(cx: &Ctx, t: &Spanned<TextureT>, base: &Path) -> Result<Texture, SceneError> {

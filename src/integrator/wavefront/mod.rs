@@ -196,7 +196,12 @@ impl<'a> Wavefront<'a> {
             return None;
         }
         let n = scene.tris.len();
-        if n == 0 || n > MAX_PRIMS || !scene.is_flat() || !scene.attrs.is_empty() {
+        if n == 0
+            || n > MAX_PRIMS
+            || !scene.is_flat()
+            || !scene.attrs.is_empty()
+            || scene.instances.is_some()
+        {
             return None;
         }
         let planar = scene.lights.single_planar()?;
@@ -242,6 +247,12 @@ impl<'a> Wavefront<'a> {
                 Bsdf::Lambert(b) => (LAMBERT, b.albedo),
                 Bsdf::Mirror(b) => (MIRROR, b.reflectance),
                 Bsdf::Dielectric(b) => {
+                    // (Glass with factors other than 1 takes the scalar path.)
+                    if b.specular_reflectance != crate::Color::ONE
+                        || b.specular_transmittance != crate::Color::ONE
+                    {
+                        return None;
+                    }
                     w.eta[j] = b.eta;
                     (GLASS, crate::Color::ONE)
                 }
@@ -256,8 +267,9 @@ impl<'a> Wavefront<'a> {
                 w.colour[c][j] = colour[c];
             }
             if idx[0] == SPHERE {
-                // (Emitting spheres are lights of their own: no scene here has one.)
-                if meta & META_EMITTER != 0 {
+                // (Emitting spheres are lights of their own: no scene here has one. The lanes'
+                // spheres face outwards.)
+                if meta & META_EMITTER != 0 || scene.sphere_frames[idx[1] as usize].flip {
                     return None;
                 }
                 let sphere = scene.spheres[idx[1] as usize];

@@ -7,10 +7,7 @@
 //! it onto mcrt's BSDFs; docs/gltf.md says how each choice differs from Appendix B.
 
 use super::Loader;
-use crate::material::{
-    Bsdf, Conductor, Dielectric, Material, Microfacet, MicrofacetType, Plastic, RoughConductor,
-    RoughDielectric, RoughPlastic,
-};
+use crate::material::{Bsdf, Material, Principled};
 use crate::scene::SceneError;
 use crate::texture::{Bitmap, BitmapTexture, FilterType, Texture, UvTransform, WrapMode};
 use crate::Color;
@@ -43,86 +40,18 @@ impl Default for Pbr {
     }
 }
 
-/// The mcrt BSDF that renders a glTF material: by the larger of metallic and transmission,
-/// a conductor whose reflectance is the base colour (Mitsuba's `none`: η = 0, k = 1, so its
-/// Fresnel term is 1 and the reflectance is the base colour at every angle), a dielectric of
-/// index `ior`, or a plastic (a `ior` coating over a diffuse base colour); GGX with
-/// α = roughness², smooth where the roughness is 0.
+/// The mcrt BSDF that renders a glTF material: Mitsuba's `principled` (the Disney BSDF),
+/// whose base colour, metallic, roughness, `spec_trans` and η are glTF's base colour,
+/// metallic, roughness, transmission and ior (docs/gltf.md compares it with Appendix B).
 pub fn bsdf_for(p: &Pbr) -> Bsdf {
-    let alpha = p.roughness * p.roughness;
-    let smooth = p.roughness == 0.0;
-    let ggx = Microfacet::ggx(alpha, alpha);
-    if p.metallic >= 0.5 && p.metallic >= p.transmission {
-        let (eta, k) = (Color::ZERO, Color::ONE);
-        return if smooth {
-            Bsdf::Conductor(Conductor {
-                eta,
-                k,
-                specular_reflectance: p.base,
-            })
-        } else {
-            Bsdf::RoughConductor(RoughConductor::new(ggx, eta, k, p.base))
-        };
-    }
-    let eta = p.ior.max(1.0 + 1e-3);
-    if p.transmission >= 0.5 {
-        return if smooth {
-            Bsdf::Dielectric(Dielectric { eta })
-        } else {
-            Bsdf::RoughDielectric(RoughDielectric::new(ggx, eta))
-        };
-    }
-    let specular = p.specular.min(Color::ONE);
-    plastic(
-        eta,
-        p.roughness,
-        p.base * diffuse_scale(eta, p.roughness),
-        specular,
-    )
-}
-
-/// Mitsuba's `plastic` (roughness 0) or `roughplastic` (GGX, α = roughness²), linear.
-fn plastic(eta: f32, roughness: f32, diffuse: Color, specular: Color) -> Bsdf {
-    if roughness == 0.0 {
-        Bsdf::Plastic(Plastic::new(eta, diffuse, specular, false))
-    } else {
-        let alpha = roughness * roughness;
-        Bsdf::RoughPlastic(RoughPlastic::new(
-            MicrofacetType::Ggx,
-            alpha,
-            eta,
-            diffuse,
-            specular,
-            false,
-        ))
-    }
-}
-
-/// What the base colour of a plastic is multiplied by so that its diffuse albedo at normal
-/// incidence is glTF's, (1 − F0)·baseColor with F0 = ((η − 1)/(η + 1))² (Appendix B's
-/// `fresnel_mix`). Mitsuba's plastics see the base through the coating twice and lose more
-/// (for η = 1.5 their diffuse albedo is about 0.6 × the base colour); the albedo per unit of
-/// base colour is integrated from the BSDF's own `eval` (midpoint rule in cos θi, on which
-/// the diffuse part alone depends).
-pub fn diffuse_scale(eta: f32, roughness: f32) -> f32 {
-    const N: usize = 256;
-    let m = Material::new(plastic(eta, roughness, Color::ONE, Color::ZERO), false);
-    let wo = glam::Vec3A::Z;
-    let albedo: f32 = (0..N)
-        .map(|i| {
-            let mu = (i as f32 + 0.5) / N as f32;
-            let wi = glam::Vec3A::new((1.0 - mu * mu).sqrt(), 0.0, mu);
-            m.eval(wo, wi).x * mu
-        })
-        .sum::<f32>()
-        * std::f32::consts::TAU
-        / N as f32;
-    let f0 = ((eta - 1.0) / (eta + 1.0)).powi(2);
-    if albedo > 0.0 {
-        (1.0 - f0) / albedo
-    } else {
-        1.0
-    }
+    Bsdf::Principled(Principled {
+        base_color: p.base,
+        roughness: p.roughness,
+        metallic: p.metallic,
+        spec_trans: p.transmission,
+        eta: Principled::eta_of(Some(p.ior), None, p.transmission != 0.0),
+        ..Principled::default()
+    })
 }
 
 impl Loader<'_> {
@@ -140,18 +69,14 @@ impl Loader<'_> {
         let (pbr, base_tex) = self.pbr(m, &what)?;
         let mut mat = Material::new(bsdf_for(&pbr), m.double_sided());
         if let Some(info) = base_tex {
-            if mat.takes_texture() {
-                let mut factor =
-                    Color::from_slice(&m.pbr_metallic_roughness().base_color_factor()[..3]);
-                if matches!(mat.bsdf, Bsdf::Plastic(_) | Bsdf::RoughPlastic(_)) {
-                    factor *= diffuse_scale(pbr.ior.max(1.0 + 1e-3), pbr.roughness);
-                }
-                let w = format!("{what}.baseColorTexture");
-                mat.texture = self.texture(&info, false, (factor, Color::ZERO), &w)?;
-            } else {
-                self.approximate(format!(
-                    "{what}: the base colour texture does not tint transmission"
-                ));
+            let factor = Color::from_slice(&m.pbr_metallic_roughness().base_color_factor()[..3]);
+            let w = format!("{what}.baseColorTexture");
+            if let Some(texture) = self.texture(&info, false, (factor, Color::ZERO), &w)? {
+                mat.slots = vec![crate::material::textured::Binding {
+                    texture,
+                    slot: crate::material::textured::slots::MAIN_COLOR,
+                }]
+                .into_boxed_slice();
             }
         }
         if let Some(n) = m.normal_texture() {
@@ -243,31 +168,9 @@ impl Loader<'_> {
 
     /// Approximations and notes for what [`bsdf_for`] cannot express.
     fn note_unsupported(&mut self, m: &::gltf::Material, p: &Pbr, what: &str) {
-        if p.metallic > 0.0 && p.metallic < 1.0 {
+        if p.specular != Color::ONE {
             self.approximate(format!(
-                "{what}: metallic {:.2} is rendered as {}",
-                p.metallic,
-                if p.metallic >= 0.5 {
-                    "a metal"
-                } else {
-                    "a dielectric"
-                }
-            ));
-        }
-        if p.transmission > 0.0 && p.transmission < 1.0 && p.metallic < 0.5 {
-            self.approximate(format!(
-                "{what}: transmission {:.2} is rendered as {}",
-                p.transmission,
-                if p.transmission >= 0.5 {
-                    "full transmission"
-                } else {
-                    "none"
-                }
-            ));
-        }
-        if p.metallic < 0.5 && p.transmission >= 0.5 && p.base != Color::ONE {
-            self.approximate(format!(
-                "{what}: the base colour does not tint transmission"
+                "{what}: KHR_materials_specular is ignored (principled's specular follows ior)"
             ));
         }
         if m.occlusion_texture().is_some() {
@@ -554,73 +457,23 @@ mod tests {
     }
 
     #[test]
-    fn mapping_by_metallic_and_transmission() {
-        let p = |metallic, transmission, roughness| Pbr {
-            metallic,
-            transmission,
-            roughness,
-            ..Pbr::default()
+    fn mapping_onto_principled() {
+        let p = Pbr {
+            base: Color::new(0.8, 0.5, 0.2),
+            metallic: 0.3,
+            roughness: 0.6,
+            ior: 1.4,
+            transmission: 0.7,
+            specular: Color::ONE,
         };
-        assert!(matches!(
-            bsdf_for(&p(1.0, 0.0, 0.5)),
-            Bsdf::RoughConductor(_)
-        ));
-        assert!(matches!(bsdf_for(&p(1.0, 0.0, 0.0)), Bsdf::Conductor(_)));
-        assert!(matches!(bsdf_for(&p(0.0, 0.0, 0.5)), Bsdf::RoughPlastic(_)));
-        assert!(matches!(bsdf_for(&p(0.0, 0.0, 0.0)), Bsdf::Plastic(_)));
-        assert!(matches!(
-            bsdf_for(&p(0.0, 1.0, 0.5)),
-            Bsdf::RoughDielectric(_)
-        ));
-        assert!(matches!(bsdf_for(&p(0.0, 1.0, 0.0)), Bsdf::Dielectric(_)));
-        // α = roughness².
-        let m = bsdf_for(&p(1.0, 0.0, 0.5)).microfacet().unwrap();
-        assert_eq!((m.alpha_u, m.alpha_v), (0.25, 0.25));
-    }
-
-    /// The plastic's diffuse albedo at normal incidence is glTF's (1 − F0)·baseColor, smooth
-    /// or rough: estimated by sampling the BSDF (independently of `diffuse_scale`'s
-    /// quadrature), counting the diffuse part of each sample's value.
-    #[test]
-    fn plastic_diffuse_albedo_is_gltfs() {
-        for roughness in [0.0, 0.3, 0.8] {
-            let pbr = Pbr {
-                base: Color::splat(0.5),
-                metallic: 0.0,
-                roughness,
-                ..Pbr::default()
-            };
-            let m = Material::new(bsdf_for(&pbr), false);
-            let diffuse_only = Material::new(
-                plastic(
-                    1.5,
-                    roughness,
-                    Color::splat(0.5 * diffuse_scale(1.5, roughness)),
-                    Color::ZERO,
-                ),
-                false,
-            );
-            let wo = glam::Vec3A::Z;
-            let n = 100_000;
-            let mut rng = crate::sampler::Pcg32::new(7, 1);
-            let mut sum = 0.0f64;
-            for _ in 0..n {
-                let u1 = rng.next_1d();
-                let u2 = glam::Vec2::new(rng.next_1d(), rng.next_1d());
-                let Some(s) = m.sample(wo, u1, u2, crate::material::TransportMode::Radiance) else {
-                    continue;
-                };
-                let pdf = m.pdf(wo, s.wi);
-                if !s.specular && pdf > 0.0 {
-                    sum += (diffuse_only.eval(wo, s.wi).x * s.wi.z / pdf) as f64;
-                }
-            }
-            let albedo = sum / n as f64;
-            let want = 0.5 * (1.0 - 0.04);
-            assert!(
-                (albedo - want).abs() < 0.01,
-                "roughness {roughness}: {albedo} vs {want}"
-            );
-        }
+        let Bsdf::Principled(b) = bsdf_for(&p) else {
+            panic!("not principled")
+        };
+        assert_eq!(b.base_color, p.base);
+        assert_eq!(
+            (b.metallic, b.roughness, b.spec_trans, b.eta),
+            (0.3, 0.6, 0.7, 1.4)
+        );
+        assert_eq!((b.clearcoat, b.sheen, b.anisotropic), (0.0, 0.0, 0.0));
     }
 }

@@ -10,6 +10,7 @@
 mod document;
 mod emitters;
 mod objects;
+mod params;
 mod props;
 mod sensor;
 mod transform;

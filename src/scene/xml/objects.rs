@@ -7,13 +7,15 @@ use crate::geometry::mesh::TriangleMesh;
 use crate::integrator::IntegratorKind;
 use crate::limits;
 use crate::material::conductor::{conductor_ior, conductor_names};
+use crate::material::textured::slots;
 use crate::material::{
-    Bsdf, Conductor, Dielectric, Lambert, Material, Microfacet, MicrofacetType, Mirror, Plastic,
-    RoughConductor, RoughDielectric, RoughPlastic, ThinDielectric,
+    Bsdf, Conductor, Dielectric, Lambert, Material, Mirror, Plastic, RoughConductor,
+    RoughDielectric, RoughPlastic, ThinDielectric,
 };
 use crate::scene::desc::{GeometryDesc, LightDesc, SceneDesc, ShapeDesc};
 use crate::scene::obj::load_obj;
 use crate::scene::ply::load_ply;
+use crate::slot;
 use crate::texture::{Bitmap, BitmapTexture, FilterType, Texture, UvTransform, WrapMode};
 use crate::Color;
 use glam::{Mat4, Vec2, Vec3};
@@ -21,18 +23,27 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::Arc;
 
+#[path = "principled.rs"]
+mod principled;
 mod wrappers;
 
-struct Builder<'a> {
-    doc: &'a Document,
+pub(super) struct Builder<'a> {
+    pub(super) doc: &'a Document,
     ids: Ids<'a>,
     lenient: bool,
-    desc: SceneDesc,
+    pub(super) desc: SceneDesc,
     /// Material index of each BSDF element already converted (shared through `<ref>`).
     materials: HashMap<*const Elem, u32>,
     textures: HashMap<*const Elem, u32>,
     default_material: Option<u32>,
+    /// The BSDF elements being converted, outermost first (a `<ref>` cycle is an error).
+    converting: Vec<*const Elem>,
+    /// Index in `desc.groups` of each shape group element already built.
+    groups: HashMap<*const Elem, u32>,
 }
+
+#[path = "instance.rs"]
+mod instance;
 
 pub fn build(doc: &Document, lenient: bool) -> Result<SceneDesc> {
     let mut b = Builder {
@@ -43,6 +54,8 @@ pub fn build(doc: &Document, lenient: bool) -> Result<SceneDesc> {
         materials: HashMap::new(),
         textures: HashMap::new(),
         default_material: None,
+        converting: Vec::new(),
+        groups: HashMap::new(),
     };
     let scene = Props::new(doc, &b.ids, &doc.root)?;
     let mut sensors = 0;
@@ -290,7 +303,7 @@ impl<'a> Builder<'a> {
     }
 
     /// The material index of a BSDF element (converted once, shared by reference).
-    fn material(&mut self, e: &'a Elem) -> Result<u32> {
+    pub(super) fn material(&mut self, e: &'a Elem) -> Result<u32> {
         if let Some(&i) = self.materials.get(&(e as *const Elem)) {
             return Ok(i);
         }
@@ -314,25 +327,8 @@ impl<'a> Builder<'a> {
         })
     }
 
-    /// A colour parameter that may be a texture: the constant (or the texture's mean, for
-    /// what a BSDF derives from it) and the texture's index.
-    fn color_param(
-        &mut self,
-        p: &Props<'a>,
-        name: &'static str,
-        default: f32,
-    ) -> Result<(Color, Option<u32>)> {
-        match p.color_src(name, Color::splat(default))? {
-            ColorSrc::Const(c) => Ok((c, None)),
-            ColorSrc::Texture(t) => {
-                let i = self.texture(t)?;
-                Ok((self.desc.textures[i as usize].mean(), Some(i)))
-            }
-        }
-    }
-
     /// The index of a texture element (converted once, shared by reference).
-    fn texture(&mut self, e: &'a Elem) -> Result<u32> {
+    pub(super) fn texture(&mut self, e: &'a Elem) -> Result<u32> {
         if let Some(&i) = self.textures.get(&(e as *const Elem)) {
             return Ok(i);
         }
@@ -383,7 +379,9 @@ impl<'a> Builder<'a> {
                     )
                 })?;
                 b.to_uv = to_uv;
+                // Storage precision, and CUDA's hardware lookups: no effect on the values.
                 p.ignore("format");
+                p.ignore("accel");
                 Texture::Bitmap(b)
             }
             "checkerboard" => Texture::Checkerboard {
@@ -406,35 +404,13 @@ impl<'a> Builder<'a> {
         Ok(i)
     }
 
-    /// The microfacet distribution: `distribution` (`beckmann`, Mitsuba's default, or
-    /// `ggx`, in any case) and `alpha`, or `alpha_u` and `alpha_v`.
-    fn roughness(&self, p: &Props<'a>) -> Result<Microfacet> {
-        let e = p.owner;
-        let kind = match p.string_opt("distribution")? {
-            None => MicrofacetType::Beckmann,
-            Some(d) => MicrofacetType::parse(d).ok_or_else(|| {
-                let at = p.elem("distribution").unwrap_or(e);
-                self.doc.err_attr(
-                    at,
-                    "value",
-                    format!("distribution '{d}': expected beckmann or ggx"),
-                )
-            })?,
-        };
-        p.ignore("sample_visible");
-        let a = p.float("alpha", 0.1)?;
-        let au = p.float("alpha_u", a)?;
-        let av = p.float("alpha_v", a)?;
-        for (n, v) in [("alpha", a), ("alpha_u", au), ("alpha_v", av)] {
-            if !(v > 0.0) {
-                return Err(self.doc.err(e, format!("{n} must be positive, got {v}")));
-            }
-        }
-        Ok(Microfacet::new(kind, au, av))
-    }
-
     /// A conductor's complex index of refraction: a named `material`, or `eta` and `k`.
-    fn conductor_ior(&mut self, p: &Props<'a>) -> Result<(Color, Color)> {
+    /// (`eta` and `k` may be textures, bound through `slots`.)
+    fn conductor_ior(
+        &mut self,
+        p: &Props<'a>,
+        slots: &mut Vec<crate::material::Binding>,
+    ) -> Result<(Color, Color)> {
         let e = p.owner;
         let named = p.string_opt("material")?;
         if p.has("eta") || p.has("k") {
@@ -443,7 +419,9 @@ impl<'a> Builder<'a> {
                     .doc
                     .err(e, "give either 'material' or 'eta' and 'k', not both"));
             }
-            return Ok((p.color("eta", Color::ZERO)?, p.color("k", Color::ONE)?));
+            let eta = self.color_param(p, "eta", 0.0, slots, slots::CONDUCTOR_ETA)?;
+            let k = self.color_param(p, "k", 1.0, slots, slots::CONDUCTOR_K)?;
+            return Ok((eta, k));
         }
         let name = named.unwrap_or("none");
         conductor_ior(name).ok_or_else(|| {
@@ -458,9 +436,21 @@ impl<'a> Builder<'a> {
     }
 
     fn bsdf(&mut self, e: &'a Elem, two_sided: bool) -> Result<Material> {
+        if self.converting.contains(&(e as *const Elem)) {
+            return Err(self
+                .doc
+                .err(e, "this BSDF contains itself (through a <ref> to it)"));
+        }
+        self.converting.push(e as *const Elem);
+        let m = self.bsdf_inner(e, two_sided);
+        self.converting.pop();
+        m
+    }
+
+    fn bsdf_inner(&mut self, e: &'a Elem, two_sided: bool) -> Result<Material> {
         let p = self.props(e)?;
         let kind = p.kind()?;
-        let mut texture = None;
+        let mut slots = Vec::new();
         let bsdf = match kind {
             "twosided" => {
                 let inner: Vec<&Elem> = p
@@ -479,58 +469,73 @@ impl<'a> Builder<'a> {
                 p.finish()?;
                 return self.bsdf(inner[0], true);
             }
+            "blendbsdf" => self.blend(&p, &mut slots)?,
             "normalmap" | "bumpmap" | "mask" => return self.wrapper(e, &p, kind, two_sided),
             "diffuse" => {
-                let (c, t) = self.color_param(&p, "reflectance", 0.5)?;
-                texture = t;
+                let lambert = slot!(Color, Lambert, |b, v| b.albedo = v);
+                let c = self.color_param(&p, "reflectance", 0.5, &mut slots, lambert)?;
                 Bsdf::Lambert(Lambert { albedo: c })
             }
             "dielectric" | "thindielectric" | "roughdielectric" => {
                 let eta = ior(&p, "int_ior", 1.5046)? / ior(&p, "ext_ior", 1.000277)?;
-                for name in ["specular_reflectance", "specular_transmittance"] {
-                    if p.color(name, Color::ONE)? != Color::ONE {
-                        return Err(self
-                            .doc
-                            .err(e, format!("{kind} {name} other than 1 is not supported")));
-                    }
-                }
+                let (r, t) = (
+                    slots::DIELECTRIC_REFLECTANCE,
+                    slots::DIELECTRIC_TRANSMITTANCE,
+                );
+                let r = self.color_param(&p, "specular_reflectance", 1.0, &mut slots, r)?;
+                let t = self.color_param(&p, "specular_transmittance", 1.0, &mut slots, t)?;
                 match kind {
-                    "dielectric" => Bsdf::Dielectric(Dielectric { eta }),
-                    "thindielectric" => Bsdf::ThinDielectric(ThinDielectric::new(eta)),
-                    _ => Bsdf::RoughDielectric(RoughDielectric::new(self.roughness(&p)?, eta)),
+                    "dielectric" => Bsdf::Dielectric(Dielectric {
+                        eta,
+                        specular_reflectance: r,
+                        specular_transmittance: t,
+                    }),
+                    "thindielectric" => Bsdf::ThinDielectric(ThinDielectric {
+                        specular_reflectance: r,
+                        specular_transmittance: t,
+                        ..ThinDielectric::new(eta)
+                    }),
+                    _ => Bsdf::RoughDielectric(RoughDielectric {
+                        specular_reflectance: r,
+                        specular_transmittance: t,
+                        ..RoughDielectric::new(self.roughness(&p, Some(&mut slots))?, eta)
+                    }),
                 }
             }
             "conductor" | "roughconductor" => {
-                let (eta, k) = self.conductor_ior(&p)?;
-                let (r, t) = self.color_param(&p, "specular_reflectance", 1.0)?;
-                texture = t;
+                let (eta, k) = self.conductor_ior(&p, &mut slots)?;
+                let textured_ior = !slots.is_empty();
+                let r = slots::CONDUCTOR_REFLECTANCE;
+                let r = self.color_param(&p, "specular_reflectance", 1.0, &mut slots, r)?;
                 if kind == "conductor" {
                     // `material = "none"` is η = 0, k = 1: Fresnel reflectance 1, a mirror.
-                    if eta == Color::ZERO && k == Color::ONE {
+                    if eta == Color::ZERO && k == Color::ONE && !textured_ior {
                         Bsdf::Mirror(Mirror { reflectance: r })
                     } else {
                         Bsdf::Conductor(Conductor::new(eta, k, r))
                     }
                 } else {
-                    Bsdf::RoughConductor(RoughConductor::new(self.roughness(&p)?, eta, k, r))
+                    let distr = self.roughness(&p, Some(&mut slots))?;
+                    Bsdf::RoughConductor(RoughConductor::new(distr, eta, k, r))
                 }
             }
             "plastic" | "roughplastic" => {
                 let eta = ior(&p, "int_ior", 1.49)? / ior(&p, "ext_ior", 1.000277)?;
-                let (d, t) = self.color_param(&p, "diffuse_reflectance", 0.5)?;
-                texture = t;
-                let s = p.color("specular_reflectance", Color::ONE)?;
+                let (d, s) = (slots::PLASTIC_DIFFUSE, slots::PLASTIC_SPECULAR);
+                let d = self.color_param(&p, "diffuse_reflectance", 0.5, &mut slots, d)?;
+                let s = self.color_param(&p, "specular_reflectance", 1.0, &mut slots, s)?;
                 let nonlinear = p.bool("nonlinear", false)?;
                 if kind == "plastic" {
                     Bsdf::Plastic(Plastic::new(eta, d, s, nonlinear))
                 } else {
-                    let m = self.roughness(&p)?;
+                    let m = self.roughness(&p, None)?;
                     if m.alpha_u != m.alpha_v {
                         return Err(self.doc.err(e, "roughplastic is isotropic: give 'alpha'"));
                     }
                     Bsdf::RoughPlastic(RoughPlastic::new(m.kind, m.alpha_u, eta, d, s, nonlinear))
                 }
             }
+            "principled" | "principledthin" => self.principled(&p, kind, &mut slots)?,
             _ => {
                 if self.lenient {
                     self.warn(
@@ -550,21 +555,22 @@ impl<'a> Builder<'a> {
                     format!(
                         "bsdf '{kind}' is not supported; mcrt has diffuse, dielectric, \
                          thindielectric, roughdielectric, conductor, roughconductor, plastic, \
-                         roughplastic, twosided, normalmap, bumpmap and mask (--lenient renders \
-                         it grey diffuse)"
+                         roughplastic, principled, principledthin, blendbsdf, twosided, normalmap, bumpmap \
+                         and mask (--lenient renders it grey diffuse)"
                     ),
                 ));
             }
         };
         p.finish()?;
-        let mut m = Material::new(bsdf, two_sided);
-        m.texture = texture;
-        Ok(m)
+        Ok(Material::new(bsdf, two_sided).with_slots(slots))
     }
 
     fn shape(&mut self, e: &'a Elem) -> Result<()> {
         let p = self.props(e)?;
         let kind = p.kind()?;
+        if let Some(done) = self.instancing(e, &p, kind) {
+            return done;
+        }
         let m = p.transform("to_world")?;
         let flip = p.bool("flip_normals", false)?;
         let geometry = match kind {
@@ -576,6 +582,29 @@ impl<'a> Builder<'a> {
             )),
             "cube" => GeometryDesc::Mesh(cube(m, flip)),
             "disk" => GeometryDesc::Mesh(disk(m, flip)),
+            "cylinder" => {
+                let p0 = p.vec3_opt("p0")?.unwrap_or(Vec3::ZERO);
+                let p1 = p.vec3_opt("p1")?.unwrap_or(Vec3::Z);
+                let r = p.float("radius", 1.0)?;
+                let to_world = crate::scene::cylinder::cylinder_transform(m, p0, p1, r)
+                    .map_err(|why| self.doc.err(e, why))?;
+                let mut mesh = crate::scene::cylinder::unit_cylinder();
+                mesh.transform(&to_world);
+                if flip {
+                    flip_mesh(&mut mesh);
+                }
+                if self.lenient {
+                    self.warn(
+                        e,
+                        format!(
+                            "cylinder traced as a mesh of {} quads with exact normals \
+                             (--lenient)",
+                            crate::scene::cylinder::SEGMENTS
+                        ),
+                    );
+                }
+                GeometryDesc::Mesh(mesh)
+            }
             "sphere" => {
                 let c = p.vec3_opt("center")?.unwrap_or(Vec3::ZERO);
                 let r = p.float("radius", 1.0)?;
@@ -601,15 +630,22 @@ impl<'a> Builder<'a> {
                         "a sphere's to_world may only translate, rotate and scale uniformly",
                     ));
                 }
-                if flip {
-                    return Err(self.doc.err(e, "flip_normals on a sphere is not supported"));
-                }
-                GeometryDesc::Sphere {
-                    center: full.transform_point3(Vec3::ZERO),
-                    radius: s,
+                // The rotation of the sphere's frame: its unit axes (the columns over the
+                // scale); identity for spheres that only move and scale.
+                let rotation = glam::Mat3::from_cols(cols[0] / s, cols[1] / s, cols[2] / s);
+                let center = full.transform_point3(Vec3::ZERO);
+                if rotation == glam::Mat3::IDENTITY && !flip {
+                    GeometryDesc::Sphere { center, radius: s }
+                } else {
+                    GeometryDesc::OrientedSphere {
+                        center,
+                        radius: s,
+                        rotation,
+                        flip,
+                    }
                 }
             }
-            "obj" | "ply" => {
+            "obj" | "ply" | "serialized" => {
                 let name = p.string_opt("filename")?.ok_or_else(|| {
                     self.doc
                         .err(e, format!("a {kind} shape needs a 'filename'"))
@@ -631,8 +667,16 @@ impl<'a> Builder<'a> {
                         m.flip_v();
                     }
                     m
-                } else {
+                } else if kind == "ply" {
                     load_ply(&path)?.into_triangle_mesh()
+                } else {
+                    let index = p.int("shape_index", 0)?;
+                    let index = u32::try_from(index).map_err(|_| {
+                        self.doc
+                            .err(e, format!("shape_index must be ≥ 0, got {index}"))
+                    })?;
+                    crate::scene::serialized::load_serialized(&path, index)
+                        .map_err(|err| self.doc.err(e, err.to_string()))?
                 };
                 if mesh.indices.is_empty() {
                     return Err(self
@@ -656,8 +700,8 @@ impl<'a> Builder<'a> {
                     e,
                     "type",
                     format!(
-                        "shape '{kind}' is not supported; mcrt has obj, ply, rectangle, cube, \
-                         sphere and disk"
+                        "shape '{kind}' is not supported; mcrt has obj, ply, serialized, \
+                         rectangle, cube, sphere, disk, cylinder, shapegroup and instance"
                     ),
                 ))
             }
@@ -682,7 +726,15 @@ impl<'a> Builder<'a> {
                             format!("emitter '{k}' cannot be attached to a shape; use 'area'"),
                         ));
                     }
-                    emission = Some(ep.color("radiance", Color::ONE)?);
+                    emission = Some(match ep.color_src("radiance", Color::ONE)? {
+                        ColorSrc::Const(c) => c,
+                        ColorSrc::Texture(t) => {
+                            let t = self.texture(t)?;
+                            let shape = self.desc.shapes.len();
+                            self.desc.emission_textures.push((shape, t));
+                            self.desc.textures[t as usize].mean()
+                        }
+                    });
                     ep.finish()?;
                 }
                 tag => {

@@ -37,6 +37,13 @@ pub enum ColorSrc<'a> {
     Texture(&'a Elem),
 }
 
+/// Where a float comes from: a constant or a texture element.
+#[derive(Clone, Copy, Debug)]
+pub enum FloatSrc<'a> {
+    Const(f32),
+    Texture(&'a Elem),
+}
+
 /// Every element with an `id`, anywhere in the scene.
 pub struct Ids<'a> {
     map: HashMap<&'a str, &'a Elem>,
@@ -260,6 +267,17 @@ impl<'a> Props<'a> {
                     ),
                 )
             })
+    }
+
+    /// A float or a texture (read as a float), if given.
+    pub fn float_src(&self, name: &'static str) -> Result<Option<FloatSrc<'a>>> {
+        match self.elem(name) {
+            Some(e) if e.tag == "texture" => {
+                self.find(name);
+                Ok(Some(FloatSrc::Texture(e)))
+            }
+            _ => Ok(self.float_opt(name)?.map(FloatSrc::Const)),
+        }
     }
 
     pub fn int(&self, name: &'static str, default: i64) -> Result<i64> {

@@ -7,8 +7,9 @@ Outputs, in this directory:
   scene.gltf + scene.bin + checker.png   glTF with an external buffer and image
   scene.glb                              the same scene as one binary file (image inside)
   scene_embedded.gltf                    the same with data: URIs
-  twin.xml + twin-*.ply                  the Mitsuba 3 twin, BSDFs as docs/gltf.md maps them
-  twin-principled.xml                    the twin with Mitsuba's `principled` BSDF
+  twin-principled.xml + twin-*.ply       the Mitsuba 3 twin, with Mitsuba's `principled` BSDF
+                                         (how mcrt renders glTF materials)
+  twin.xml                               the twin with the earlier rough-BSDF mapping
 
 The scene: a node hierarchy (a rig carrying the camera, a group with a scale carrying two
 instances of one metal cube, a glass box placed by a `matrix`), a textured rough metal floor
@@ -243,9 +244,10 @@ def tex_matrix():
     return [[c*sx, -s*sy, 0, ox], [s*sx, c*sy, 0, oy], [0, 0, 1, 0], [0, 0, 0, 1]]
 
 
-# What mcrt multiplies a plastic's base colour by, so that its diffuse albedo at normal
-# incidence is glTF's (1 - F0) * baseColor (scene::gltf::materials::diffuse_scale): here for
-# ior 1.5 and roughness 0.4, the wall's, integrated from Mitsuba 3's roughplastic.
+# twin.xml is the rough-BSDF mapping mcrt used before it had `principled` (docs/gltf.md):
+# a plastic's base colour times this, so that its diffuse albedo at normal incidence is
+# glTF's (1 - F0) * baseColor; here for ior 1.5 and roughness 0.4, the wall's, integrated
+# from Mitsuba 3's roughplastic.
 PLASTIC_SCALE = {(1.5, 0.4): 1.19731}
 
 

@@ -53,7 +53,9 @@ impl<'a> Builder<'a> {
                 if !p.bool(flag, true)? {
                     return Err(self.doc.err(
                         p.elem(flag).unwrap_or(e),
-                        format!("{kind} {flag}=false is not supported (only Mitsuba's default, true)"),
+                        format!(
+                            "{kind} {flag}=false is not supported (only Mitsuba's default, true)"
+                        ),
                     ));
                 }
             }
