@@ -95,7 +95,7 @@ pub struct LoadOptions {
 }
 
 /// Reads a scene file; the format follows the extension (`.toml`: mcrt's own format; `.xml`:
-/// Mitsuba 3).
+/// Mitsuba 3; `.gltf`, `.glb`: glTF 2.0).
 pub fn load_scene(path: &Path) -> Result<SceneDesc, Error> {
     load_scene_with(path, &LoadOptions::default())
 }
@@ -111,11 +111,12 @@ pub fn load_scene_source(path: &Path, opts: &LoadOptions) -> Result<(SceneDesc, 
         .extension()
         .and_then(|e| e.to_str())
         .map(|e| e.to_ascii_lowercase());
-    if !matches!(format.as_deref(), Some("toml" | "xml")) {
+    if !matches!(format.as_deref(), Some("toml" | "xml" | "gltf" | "glb")) {
         return Err(Error::Scene(SceneError::new(
             path,
             None,
-            "unsupported scene format (expected a .toml file or a Mitsuba 3 .xml file)",
+            "unsupported scene format (expected a .toml file, a Mitsuba 3 .xml file, or a \
+             glTF 2.0 .gltf or .glb file)",
         )));
     }
     if format.as_deref() == Some("toml") && !opts.defines.is_empty() {
@@ -125,6 +126,14 @@ pub fn load_scene_source(path: &Path, opts: &LoadOptions) -> Result<(SceneDesc, 
     }
     let bytes = input::read(path)
         .map_err(|e| SceneError::new(path, None, format!("cannot read scene file: {e}")))?;
+    if matches!(format.as_deref(), Some("gltf" | "glb")) {
+        if !opts.defines.is_empty() {
+            return Err(Error::Usage(
+                "-D parameters apply to Mitsuba XML scenes, not to glTF ones".into(),
+            ));
+        }
+        return Ok((scene::gltf::parse_gltf(path, &bytes, opts.lenient)?, bytes));
+    }
     let text = input::as_text(&bytes)
         .map_err(|e| SceneError::new(path, None, format!("cannot read scene file: {e}")))?;
     let desc = if format.as_deref() == Some("toml") {

@@ -156,12 +156,14 @@ enum ToneMapArg {
 
 #[derive(clap::Args)]
 struct RenderArgs {
-    /// Scene file: .toml (mcrt's format, see docs/scene-format.md) or .xml (Mitsuba 3).
+    /// Scene file: .toml (mcrt's format, see docs/scene-format.md), .xml (Mitsuba 3) or
+    /// .gltf/.glb (glTF 2.0, see docs/gltf.md).
     scene: PathBuf,
     /// Set a parameter of a Mitsuba XML scene (its <default> or $name), as Mitsuba's -D.
     #[arg(short = 'D', value_name = "NAME=VALUE")]
     define: Vec<String>,
-    /// Render unsupported BSDFs of an XML scene as grey diffuse (listed) instead of failing.
+    /// Render unsupported BSDFs of an XML scene as grey diffuse, and approximate what mcrt
+    /// lacks in a glTF scene, listing each, instead of failing.
     #[arg(long)]
     lenient: bool,
     /// Output image; the extension picks the format (.png or .exr). Default: SCENE's name with .png.

@@ -1,9 +1,10 @@
-//! The corpus of bad inputs (tests/bad-inputs/): scene files in mcrt's TOML format and in
-//! Mitsuba XML, and OBJ and PLY meshes, each wrong in one way. Every one must make `mcrt
-//! render` exit with status 2 and a message that names the file and says what is wrong (the
-//! fragment after `expect:` in the file's first lines), without a panic and without writing
-//! an output file. Meshes are rendered through a small scene that loads them (TOML for OBJ,
-//! Mitsuba XML for PLY and serialized meshes), Radiance HDR images through an XML scene's `envmap`.
+//! The corpus of bad inputs (tests/bad-inputs/): scene files in mcrt's TOML format, in
+//! Mitsuba XML and in glTF, and OBJ and PLY meshes, each wrong in one way. Every one must make
+//! `mcrt render` exit with status 2 and a message that names the file and says what is wrong
+//! (the fragment after `expect:` in the file's first lines; a glTF file's `asset.generator`),
+//! without a panic and without writing an output file. Meshes are rendered through a small
+//! scene that loads them (TOML for OBJ, Mitsuba XML for PLY and serialized meshes), Radiance
+//! HDR images through an XML scene's `envmap`.
 
 mod common;
 
@@ -27,6 +28,9 @@ fn expectation(path: &Path) -> String {
         .trim()
         .trim_end_matches("-->")
         .trim()
+        // A glTF file's expectation is a JSON string: `"expect: …",`.
+        .trim_end_matches(',')
+        .trim_end_matches('"')
         .to_string()
 }
 
@@ -351,6 +355,42 @@ bad_input!(
     "toml-rr-survival-one-minus-ulp.toml"
 );
 
+// glTF 2.0 (written by tests/data/gltf/make_bad_inputs.py).
+bad_input!(gltf_clearcoat_strict_gltf, "gltf-clearcoat-strict.gltf");
+bad_input!(
+    gltf_accessor_out_of_bounds_gltf,
+    "gltf-accessor-out-of-bounds.gltf"
+);
+bad_input!(gltf_bad_json_gltf, "gltf-bad-json.gltf");
+bad_input!(gltf_bad_reference_gltf, "gltf-bad-reference.gltf");
+bad_input!(
+    gltf_glb_length_too_small_glb,
+    "gltf-glb-length-too-small.glb"
+);
+bad_input!(
+    gltf_glb_without_bin_chunk_glb,
+    "gltf-glb-without-bin-chunk.glb"
+);
+bad_input!(gltf_image_without_data_gltf, "gltf-image-without-data.gltf");
+bad_input!(gltf_index_out_of_range_gltf, "gltf-index-out-of-range.gltf");
+bad_input!(gltf_missing_buffer_gltf, "gltf-missing-buffer.gltf");
+bad_input!(gltf_no_camera_gltf, "gltf-no-camera.gltf");
+bad_input!(gltf_no_light_gltf, "gltf-no-light.gltf");
+bad_input!(
+    gltf_position_accessor_missing_gltf,
+    "gltf-position-accessor-missing.gltf"
+);
+bad_input!(gltf_node_cycle_gltf, "gltf-node-cycle.gltf");
+bad_input!(
+    gltf_roughness_above_one_gltf,
+    "gltf-roughness-above-one.gltf"
+);
+bad_input!(gltf_truncated_glb, "gltf-truncated.glb");
+bad_input!(
+    gltf_unsupported_extension_gltf,
+    "gltf-unsupported-extension.gltf"
+);
+bad_input!(gltf_zero_yfov_gltf, "gltf-zero-yfov.gltf");
 // Issue 25: cameras (thinlens, orthographic, focal_length), cylinder, serialized meshes.
 bad_input!(
     serialized_bad_magic_serialized,

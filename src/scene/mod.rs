@@ -8,6 +8,7 @@ pub mod build;
 pub mod cylinder;
 pub mod desc;
 pub mod error;
+pub mod gltf;
 pub mod instance;
 pub mod mask;
 pub mod obj;

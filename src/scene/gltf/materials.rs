@@ -1,0 +1,479 @@
+//! Materials (glTF 2.0 §3.9 and Appendix B) and their textures.
+//!
+//! glTF's metallic-roughness model mixes a metal (a GGX microfacet reflection whose Fresnel
+//! term goes from the base colour at normal incidence to white) and a dielectric (GGX
+//! reflection with the Fresnel term of `ior` over a diffuse base, or refraction where
+//! KHR_materials_transmission says so) by `metallic`. [`bsdf_for`] is the one place that maps
+//! it onto mcrt's BSDFs; docs/gltf.md says how each choice differs from Appendix B.
+
+use super::Loader;
+use crate::material::{Bsdf, Material, Principled};
+use crate::scene::SceneError;
+use crate::texture::{Bitmap, BitmapTexture, FilterType, Texture, UvTransform, WrapMode};
+use crate::Color;
+use std::sync::Arc;
+
+/// A glTF material's parameters, with textures other than the base colour's reduced to
+/// their means.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pbr {
+    pub base: Color,
+    pub metallic: f32,
+    pub roughness: f32,
+    pub ior: f32,
+    pub transmission: f32,
+    /// KHR_materials_specular: the dielectric's specular strength and colour.
+    pub specular: Color,
+}
+
+impl Default for Pbr {
+    /// glTF's defaults (§5.19, §5.22): white, fully metallic, fully rough, ior 1.5.
+    fn default() -> Self {
+        Pbr {
+            base: Color::ONE,
+            metallic: 1.0,
+            roughness: 1.0,
+            ior: 1.5,
+            transmission: 0.0,
+            specular: Color::ONE,
+        }
+    }
+}
+
+/// The mcrt BSDF that renders a glTF material: Mitsuba's `principled` (the Disney BSDF),
+/// whose base colour, metallic, roughness, `spec_trans` and η are glTF's base colour,
+/// metallic, roughness, transmission and ior (docs/gltf.md compares it with Appendix B).
+pub fn bsdf_for(p: &Pbr) -> Bsdf {
+    Bsdf::Principled(Principled {
+        base_color: p.base,
+        roughness: p.roughness,
+        metallic: p.metallic,
+        spec_trans: p.transmission,
+        eta: Principled::eta_of(Some(p.ior), None, p.transmission != 0.0),
+        ..Principled::default()
+    })
+}
+
+impl Loader<'_> {
+    /// The mcrt material (index into the scene's) and the emitted radiance of a glTF
+    /// material, made once per material.
+    pub fn material(&mut self, m: &::gltf::Material) -> Result<(u32, Option<Color>), SceneError> {
+        if let Some(&done) = self.material_cache.get(&m.index()) {
+            return Ok(done);
+        }
+        let what = match (m.index(), m.name()) {
+            (Some(i), Some(n)) => format!("materials[{i}] ('{}')", crate::input::shorten(n)),
+            (Some(i), None) => format!("materials[{i}]"),
+            (None, _) => "the default material".to_string(),
+        };
+        let (pbr, base_tex) = self.pbr(m, &what)?;
+        let mut mat = Material::new(bsdf_for(&pbr), m.double_sided());
+        if let Some(info) = base_tex {
+            let factor = Color::from_slice(&m.pbr_metallic_roughness().base_color_factor()[..3]);
+            let w = format!("{what}.baseColorTexture");
+            if let Some(texture) = self.texture(&info, false, (factor, Color::ZERO), &w)? {
+                mat.slots = vec![crate::material::textured::Binding {
+                    texture,
+                    slot: crate::material::textured::slots::MAIN_COLOR,
+                }]
+                .into_boxed_slice();
+            }
+        }
+        if let Some(n) = m.normal_texture() {
+            mat.normal_map = self.normal_texture(&n, &what)?;
+        }
+        let emission = self.emission(m, &what)?;
+        let index = self.desc.materials.len() as u32;
+        self.desc.materials.push(mat);
+        self.material_cache.insert(m.index(), (index, emission));
+        Ok((index, emission))
+    }
+
+    /// The material's parameters, and its base colour texture.
+    fn pbr<'b>(
+        &mut self,
+        m: &::gltf::Material<'b>,
+        what: &str,
+    ) -> Result<(Pbr, Option<::gltf::texture::Info<'b>>), SceneError> {
+        let mr = m.pbr_metallic_roughness();
+        let f = mr.base_color_factor();
+        let mut p = Pbr {
+            base: Color::new(f[0], f[1], f[2]),
+            metallic: mr.metallic_factor(),
+            roughness: mr.roughness_factor(),
+            ior: m.ior().unwrap_or(1.5),
+            ..Pbr::default()
+        };
+        let base_tex = mr.base_color_texture();
+        if let Some(info) = &base_tex {
+            if let Some(mean) =
+                self.texture_mean(info, false, &format!("{what}.baseColorTexture"))?
+            {
+                p.base *= mean;
+            }
+        }
+        if let Some(info) = mr.metallic_roughness_texture() {
+            let w = format!("{what}.metallicRoughnessTexture");
+            if let Some(mean) = self.texture_mean(&info, true, &w)? {
+                // B is metalness, G roughness (§3.9.2).
+                p.metallic *= mean.z;
+                p.roughness *= mean.y;
+                self.approximate(format!(
+                    "{w}: metalness and roughness vary over the surface; rendered with their \
+                     means ({:.2}, {:.2})",
+                    p.metallic, p.roughness
+                ));
+            }
+        }
+        if let Some(t) = m.transmission() {
+            p.transmission = t.transmission_factor();
+            if t.transmission_texture().is_some() {
+                self.approximate(format!("{what}: the transmission texture is ignored"));
+            }
+        }
+        if let Some(s) = m.specular() {
+            p.specular = Color::from(s.specular_color_factor()) * s.specular_factor();
+            if s.specular_texture().is_some() || s.specular_color_texture().is_some() {
+                self.approximate(format!("{what}: the specular textures are ignored"));
+            }
+        }
+        self.check_pbr(&p, what)?;
+        self.note_unsupported(m, &p, what);
+        Ok((p, base_tex))
+    }
+
+    /// Refuses parameters outside their ranges (glTF 2.0 §5.19, §5.22).
+    fn check_pbr(&self, p: &Pbr, what: &str) -> Result<(), SceneError> {
+        let unit = |v: f32| (0.0..=1.0).contains(&v);
+        let bad = if !(p.base.is_finite() && p.base.min_element() >= 0.0) {
+            Some(format!("baseColorFactor {:?}", p.base.to_array()))
+        } else if !unit(p.metallic) {
+            Some(format!("metallicFactor {}", p.metallic))
+        } else if !unit(p.roughness) {
+            Some(format!("roughnessFactor {}", p.roughness))
+        } else if !unit(p.transmission) {
+            Some(format!("transmissionFactor {}", p.transmission))
+        } else if !(p.ior >= 1.0 && p.ior.is_finite()) {
+            Some(format!("ior {} (must be at least 1)", p.ior))
+        } else if !(p.specular.is_finite() && p.specular.min_element() >= 0.0) {
+            Some(format!("specular {:?}", p.specular.to_array()))
+        } else {
+            None
+        };
+        match bad {
+            Some(b) => Err(self.err(format!("{what}: {b} is out of range"))),
+            None => Ok(()),
+        }
+    }
+
+    /// Approximations and notes for what [`bsdf_for`] cannot express.
+    fn note_unsupported(&mut self, m: &::gltf::Material, p: &Pbr, what: &str) {
+        if p.specular != Color::ONE {
+            self.approximate(format!(
+                "{what}: KHR_materials_specular is ignored (principled's specular follows ior)"
+            ));
+        }
+        if m.occlusion_texture().is_some() {
+            self.note(format!(
+                "{what}: the occlusion texture is ignored (a path tracer computes occlusion)"
+            ));
+        }
+        if m.alpha_mode() != ::gltf::material::AlphaMode::Opaque {
+            self.approximate(format!(
+                "{what}: alphaMode {:?} is rendered opaque",
+                m.alpha_mode()
+            ));
+        }
+        let factor = |ext: &str, key: &str| -> f32 {
+            m.extension_value(ext)
+                .and_then(|v| v.get(key))
+                .map(|v| match v {
+                    ::gltf::json::Value::Number(n) => n.as_f64().unwrap_or(0.0) as f32,
+                    ::gltf::json::Value::Array(a) => a
+                        .iter()
+                        .filter_map(|x| x.as_f64())
+                        .fold(0.0f32, |s, x| s.max(x as f32)),
+                    _ => 0.0,
+                })
+                .unwrap_or(0.0)
+        };
+        if factor("KHR_materials_clearcoat", "clearcoatFactor") > 0.0 {
+            self.approximate(format!("{what}: the clearcoat layer is ignored"));
+        }
+        if factor("KHR_materials_sheen", "sheenColorFactor") > 0.0 {
+            self.approximate(format!("{what}: the sheen layer is ignored"));
+        }
+    }
+
+    /// Emitted radiance: emissiveFactor × KHR_materials_emissive_strength, times the mean of
+    /// the emissive texture; None for black.
+    fn emission(&mut self, m: &::gltf::Material, what: &str) -> Result<Option<Color>, SceneError> {
+        let strength = m.emissive_strength().unwrap_or(1.0);
+        let mut e = Color::from(m.emissive_factor()) * strength;
+        if !(e.is_finite() && e.min_element() >= 0.0) {
+            return Err(self.err(format!(
+                "{what}: emissiveFactor {:?} times emissive strength {strength} must be finite \
+                 and not negative",
+                m.emissive_factor()
+            )));
+        }
+        if e == Color::ZERO {
+            return Ok(None);
+        }
+        if let Some(info) = m.emissive_texture() {
+            let w = format!("{what}.emissiveTexture");
+            if let Some(mean) = self.texture_mean(&info, false, &w)? {
+                e *= mean;
+                self.approximate(format!(
+                    "{w}: emission varies over the surface; rendered with its mean"
+                ));
+            }
+        }
+        if m.double_sided() {
+            self.note(format!(
+                "{what}: emissive and double-sided: mcrt's area lights emit from the front \
+                 side only"
+            ));
+        }
+        Ok((e != Color::ZERO).then_some(e))
+    }
+
+    /// The decoded image of a texture (cached), or None with an approximation for a format
+    /// mcrt does not decode (JPEG, WebP, KTX2).
+    fn bitmap(
+        &mut self,
+        tex: &::gltf::Texture,
+        raw: bool,
+        what: &str,
+    ) -> Result<Option<Arc<Bitmap>>, SceneError> {
+        let img = tex.source();
+        let key = (img.index(), raw);
+        if let Some(b) = self.images.get(&key) {
+            return Ok(Some(b.clone()));
+        }
+        // From the JSON: the crate's `Image::source` unwraps a missing mimeType or uri.
+        let json = &self.doc.as_json().images[img.index()];
+        let bytes = match (&json.buffer_view, &json.uri) {
+            (Some(v), _) => {
+                let view = self.doc.views().nth(v.value()).ok_or_else(|| {
+                    self.err(format!(
+                        "images[{}]: no bufferViews[{}]",
+                        img.index(),
+                        v.value()
+                    ))
+                })?;
+                self.view_bytes(&view)?.to_vec()
+            }
+            (None, Some(uri)) => super::buffers::read_uri(self.path, uri)
+                .map_err(|e| self.err(format!("images[{}]: {e}", img.index())))?,
+            (None, None) => {
+                return Err(self.err(format!(
+                    "images[{}] has neither a uri nor a bufferView",
+                    img.index()
+                )))
+            }
+        };
+        if bytes.starts_with(&[0xFF, 0xD8, 0xFF]) {
+            self.approximate(format!(
+                "{what}: images[{}] is a JPEG, which mcrt does not decode: the texture is \
+                 ignored (in Blender, export images as PNG)",
+                img.index()
+            ));
+            return Ok(None);
+        }
+        let b = Arc::new(
+            Bitmap::decode(&bytes, raw)
+                .map_err(|e| self.err(format!("images[{}] ({what}): {e}", img.index())))?,
+        );
+        self.images.insert(key, b.clone());
+        Ok(Some(b))
+    }
+
+    /// The mean of a texture's image (linear), or None where it cannot be decoded.
+    fn texture_mean(
+        &mut self,
+        info: &::gltf::texture::Info,
+        raw: bool,
+        what: &str,
+    ) -> Result<Option<Color>, SceneError> {
+        Ok(self.bitmap(&info.texture(), raw, what)?.map(|b| b.mean()))
+    }
+
+    /// The normal texture as Mitsuba's `normalmap` reads one: linear values c, the normal
+    /// 2c − 1 in the frame (dp/du, n × dp/du, n), which is glTF's tangent space (+x along
+    /// increasing u, +y towards the image's top, i.e. decreasing v) where the tangents follow
+    /// the texture coordinates; glTF's `scale` multiplies x and y.
+    fn normal_texture(
+        &mut self,
+        n: &::gltf::material::NormalTexture,
+        what: &str,
+    ) -> Result<Option<u32>, SceneError> {
+        let s = n.scale();
+        if !(s.is_finite() && (0.0..=1.0).contains(&s.abs())) {
+            self.approximate(format!(
+                "{what}.normalTexture: scale {s} is clamped to [-1, 1]"
+            ));
+        }
+        let s = if s.is_finite() {
+            s.clamp(-1.0, 1.0)
+        } else {
+            1.0
+        };
+        // c ↦ ((2c − 1)·(s, s, 1) + 1)/2, which stays in [0, 1] for |s| ≤ 1.
+        let map = (
+            Color::new(s, s, 1.0),
+            Color::new(0.5 - 0.5 * s, 0.5 - 0.5 * s, 0.0),
+        );
+        if n.tex_coord() != 0 {
+            self.approximate(format!(
+                "{what}.normalTexture: texture coordinates TEXCOORD_{} are read as TEXCOORD_0",
+                n.tex_coord()
+            ));
+        }
+        let tex = n.texture();
+        let w = format!("{what}.normalTexture");
+        let Some(bitmap) = self.bitmap(&tex, true, &w)? else {
+            return Ok(None);
+        };
+        let bitmap = self.mapped(bitmap, map, &w)?;
+        self.push_texture(&tex, bitmap, UvTransform::IDENTITY, &w);
+        Ok(Some(self.desc.textures.len() as u32 - 1))
+    }
+
+    /// The bitmap with each pixel p mapped to p·mul + add (clamped at 0).
+    fn mapped(
+        &self,
+        bitmap: Arc<Bitmap>,
+        (mul, add): (Color, Color),
+        what: &str,
+    ) -> Result<Arc<Bitmap>, SceneError> {
+        if mul == Color::ONE && add == Color::ZERO {
+            return Ok(bitmap);
+        }
+        let px = bitmap
+            .pixels
+            .iter()
+            .map(|p| (*p * mul + add).max(Color::ZERO))
+            .collect();
+        Ok(Arc::new(
+            Bitmap::from_pixels(bitmap.width, bitmap.height, px)
+                .map_err(|e| self.err(format!("{what}: {e}")))?,
+        ))
+    }
+
+    /// A texture for a material's main colour: the image mapped by `map` (p·mul + add), with
+    /// the sampler's filter and wrap mode and the KHR_texture_transform; its index in the
+    /// scene's textures.
+    fn texture(
+        &mut self,
+        info: &::gltf::texture::Info,
+        raw: bool,
+        map: (Color, Color),
+        what: &str,
+    ) -> Result<Option<u32>, SceneError> {
+        let tex = info.texture();
+        let Some(bitmap) = self.bitmap(&tex, raw, what)? else {
+            return Ok(None);
+        };
+        let bitmap = self.mapped(bitmap, map, what)?;
+        let mut set = info.tex_coord();
+        let mut to_uv = UvTransform::IDENTITY;
+        if let Some(t) = info.texture_transform() {
+            to_uv = uv_transform(t.offset(), t.rotation(), t.scale());
+            set = t.tex_coord().unwrap_or(set);
+        }
+        if set != 0 {
+            self.approximate(format!(
+                "{what}: texture coordinates TEXCOORD_{set} are read as TEXCOORD_0"
+            ));
+        }
+        self.push_texture(&tex, bitmap, to_uv, what);
+        Ok(Some(self.desc.textures.len() as u32 - 1))
+    }
+
+    /// Adds a bitmap texture with the glTF texture's sampler.
+    fn push_texture(
+        &mut self,
+        tex: &::gltf::Texture,
+        bitmap: Arc<Bitmap>,
+        to_uv: UvTransform,
+        what: &str,
+    ) {
+        let sampler = tex.sampler();
+        let wrap = |w: ::gltf::texture::WrappingMode| match w {
+            ::gltf::texture::WrappingMode::ClampToEdge => WrapMode::Clamp,
+            ::gltf::texture::WrappingMode::MirroredRepeat => WrapMode::Mirror,
+            ::gltf::texture::WrappingMode::Repeat => WrapMode::Repeat,
+        };
+        if sampler.wrap_s() != sampler.wrap_t() {
+            self.approximate(format!(
+                "{what}: wrapS {:?} differs from wrapT {:?}; both wrap as wrapS",
+                sampler.wrap_s(),
+                sampler.wrap_t()
+            ));
+        }
+        let filter = match sampler.mag_filter() {
+            Some(::gltf::texture::MagFilter::Nearest) => FilterType::Nearest,
+            _ => FilterType::Bilinear,
+        };
+        self.desc.textures.push(Texture::Bitmap(BitmapTexture {
+            bitmap,
+            filter,
+            wrap: wrap(sampler.wrap_s()),
+            to_uv,
+        }));
+    }
+}
+
+/// KHR_texture_transform: uv ↦ T·R·S·uv, with R the GLSL `mat3(cos, sin, 0, −sin, cos, 0,
+/// 0, 0, 1)` of the extension's specification (column-major: columns (cos, sin) and
+/// (−sin, cos)).
+pub fn uv_transform(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> UvTransform {
+    UvTransform(glam::Affine2::from_scale_angle_translation(
+        scale.into(),
+        rotation,
+        offset.into(),
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec2;
+
+    /// The extension's example: offset, then rotation, then scale, as the specification's
+    /// matrix product applies them (scale first).
+    #[test]
+    fn texture_transform_matches_the_spec_matrix() {
+        let (o, r, s) = ([0.5, -0.25], 0.3f32, [2.0, 3.0]);
+        let t = uv_transform(o, r, s);
+        let uv = Vec2::new(0.2, 0.7);
+        // mat3 columns as written in the specification.
+        let (c, sn) = (r.cos(), r.sin());
+        let scaled = Vec2::new(uv.x * s[0], uv.y * s[1]);
+        let rotated = Vec2::new(c * scaled.x - sn * scaled.y, sn * scaled.x + c * scaled.y);
+        let want = rotated + Vec2::from(o);
+        assert!((t.apply(uv) - want).length() < 1e-6);
+    }
+
+    #[test]
+    fn mapping_onto_principled() {
+        let p = Pbr {
+            base: Color::new(0.8, 0.5, 0.2),
+            metallic: 0.3,
+            roughness: 0.6,
+            ior: 1.4,
+            transmission: 0.7,
+            specular: Color::ONE,
+        };
+        let Bsdf::Principled(b) = bsdf_for(&p) else {
+            panic!("not principled")
+        };
+        assert_eq!(b.base_color, p.base);
+        assert_eq!(
+            (b.metallic, b.roughness, b.spec_trans, b.eta),
+            (0.3, 0.6, 0.7, 1.4)
+        );
+        assert_eq!((b.clearcoat, b.sheen, b.anisotropic), (0.0, 0.0, 0.0));
+    }
+}

@@ -1,0 +1,196 @@
+//! Meshes (glTF 2.0 §3.7.2): each primitive becomes a triangle mesh in world space, with its
+//! vertex normals (NORMAL) and texture coordinates (TEXCOORD_0) where it has them; a
+//! primitive without normals is flat-shaded, as the specification asks. A mesh that several
+//! nodes use is copied for each (flattened instancing).
+
+use super::Loader;
+use crate::geometry::mesh::TriangleMesh;
+use crate::scene::desc::{GeometryDesc, ShapeDesc, MAX_PRIMITIVES};
+use crate::scene::SceneError;
+use ::gltf::mesh::{Mode, Semantic};
+use glam::{Mat4, Vec2, Vec3};
+
+pub fn add_mesh(l: &mut Loader, mesh: &::gltf::Mesh, world: &Mat4) -> Result<(), SceneError> {
+    for prim in mesh.primitives() {
+        let what = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
+        let Some(mut tm) = read_primitive(l, &prim, &what)? else {
+            continue;
+        };
+        l.triangles += tm.indices.len();
+        l.vertices += tm.positions.len();
+        if l.triangles > MAX_PRIMITIVES {
+            return Err(l.err(format!(
+                "{what}: the scene's meshes, one copy per node that uses them, have more than \
+                 {MAX_PRIMITIVES} triangles"
+            )));
+        }
+        tm.transform(world);
+        if tm.positions.iter().any(|p| !p.is_finite()) {
+            return Err(l.err(format!(
+                "{what}: a vertex is not finite once placed by its node's transform"
+            )));
+        }
+        let (material, emission) = l.material(&prim.material())?;
+        let emission = match emission {
+            Some(e) if area(&tm) > 0.0 => Some(e),
+            Some(_) => {
+                l.note(format!(
+                    "{what}: emissive but of zero area: it emits nothing"
+                ));
+                None
+            }
+            None => None,
+        };
+        l.desc.shapes.push(ShapeDesc {
+            geometry: GeometryDesc::Mesh(tm),
+            material,
+            emission,
+        });
+    }
+    Ok(())
+}
+
+fn area(m: &TriangleMesh) -> f32 {
+    m.indices
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| m.positions[i as usize]);
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .sum()
+}
+
+/// The primitive's triangles in its mesh's space; None (with a note) for points and lines.
+fn read_primitive(
+    l: &mut Loader,
+    prim: &::gltf::Primitive,
+    what: &str,
+) -> Result<Option<TriangleMesh>, SceneError> {
+    let mode = prim.mode();
+    if !matches!(
+        mode,
+        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+    ) {
+        l.note(format!(
+            "{what}: mode {mode:?} (points or lines) has no surface: skipped"
+        ));
+        return Ok(None);
+    }
+    let pos = prim
+        .get(&Semantic::Positions)
+        .ok_or_else(|| l.err(format!("{what} has no POSITION attribute")))?;
+    let positions: Vec<Vec3> = l
+        .read_floats(&pos, "POSITION", 3)?
+        .chunks_exact(3)
+        .map(Vec3::from_slice)
+        .collect();
+    let n = positions.len();
+    if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+        return Err(l.err(format!("{what}: POSITION {i} is not finite")));
+    }
+    let count_check = |l: &Loader, name: &str, len: usize| {
+        if len != n {
+            Err(l.err(format!(
+                "{what}: {name} has {len} elements but POSITION has {n}"
+            )))
+        } else {
+            Ok(())
+        }
+    };
+    let normals = match prim.get(&Semantic::Normals) {
+        Some(a) => {
+            let v: Vec<Vec3> = l
+                .read_floats(&a, "NORMAL", 3)?
+                .chunks_exact(3)
+                .map(|c| {
+                    let v = Vec3::from_slice(c);
+                    if v.is_finite() {
+                        v.normalize_or_zero()
+                    } else {
+                        Vec3::ZERO
+                    }
+                })
+                .collect();
+            count_check(l, "NORMAL", v.len())?;
+            Some(v)
+        }
+        None => None,
+    };
+    let uvs = match prim.get(&Semantic::TexCoords(0)) {
+        Some(a) => {
+            let v: Vec<Vec2> = l
+                .read_floats(&a, "TEXCOORD_0", 2)?
+                .chunks_exact(2)
+                .map(|c| {
+                    let t = Vec2::from_slice(c);
+                    if t.is_finite() {
+                        t
+                    } else {
+                        Vec2::ZERO
+                    }
+                })
+                .collect();
+            count_check(l, "TEXCOORD_0", v.len())?;
+            Some(v)
+        }
+        None => None,
+    };
+    let list: Vec<u32> = match prim.indices() {
+        Some(a) => {
+            let idx = l.read_indices(&a, "indices")?;
+            if let Some(k) = idx.iter().position(|&i| i as usize >= n) {
+                return Err(l.err(format!(
+                    "{what}: index {} at position {k} is out of range (the primitive has {n} \
+                     vertices)",
+                    idx[k]
+                )));
+            }
+            idx
+        }
+        None => (0..n as u32).collect(),
+    };
+    Ok(Some(TriangleMesh {
+        positions,
+        normals,
+        uvs,
+        indices: triangles(mode, &list),
+    }))
+}
+
+/// Triangles of a list, strip or fan of vertex indices (glTF 2.0 §3.7.2.1).
+pub fn triangles(mode: Mode, v: &[u32]) -> Vec<[u32; 3]> {
+    match mode {
+        Mode::TriangleStrip => (0..v.len().saturating_sub(2))
+            .map(|i| {
+                let o = i % 2;
+                [v[i], v[i + 1 + o], v[i + 2 - o]]
+            })
+            .collect(),
+        Mode::TriangleFan => (1..v.len().saturating_sub(1))
+            .map(|i| [v[i], v[i + 1], v[0]])
+            .collect(),
+        _ => v.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Strips alternate their winding so every triangle faces the same way; fans turn
+    /// about the first vertex.
+    #[test]
+    fn strips_and_fans() {
+        let v = [0, 1, 2, 3, 4];
+        assert_eq!(
+            triangles(Mode::TriangleStrip, &v),
+            vec![[0, 1, 2], [1, 3, 2], [2, 3, 4]]
+        );
+        assert_eq!(
+            triangles(Mode::TriangleFan, &v),
+            vec![[1, 2, 0], [2, 3, 0], [3, 4, 0]]
+        );
+        assert_eq!(triangles(Mode::Triangles, &v), vec![[0, 1, 2]]);
+        assert!(triangles(Mode::TriangleStrip, &[0, 1]).is_empty());
+    }
+}

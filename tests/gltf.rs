@@ -1,0 +1,218 @@
+//! glTF 2.0 scenes (tests/data/gltf, written by make_scene.py): the three encodings of the
+//! scene load alike, and the render agrees with Mitsuba 3's render of the scene's XML twin.
+//! See docs/gltf.md.
+
+mod common;
+
+use common::*;
+use mcrt::scene::desc::FileSettings;
+
+const SCENE: &str = "tests/data/gltf/scene.gltf";
+
+/// The description without its warnings (which name the file).
+fn described(rel: &str) -> String {
+    let mut desc = mcrt::load_scene(&project_path(rel)).expect("scene loads");
+    desc.warnings.clear();
+    format!("{desc:?}")
+}
+
+/// `.gltf` with an external buffer and image, `.gltf` with data: URIs and `.glb` with the
+/// image in its binary chunk describe the same scene.
+#[test]
+fn gltf_glb_and_embedded_load_the_same_scene() {
+    let a = described(SCENE);
+    assert_eq!(a, described("tests/data/gltf/scene.glb"));
+    assert_eq!(a, described("tests/data/gltf/scene_embedded.gltf"));
+}
+
+/// The scene's contents: the mesh used by two nodes is copied, the camera is named by its
+/// node and by itself, and the aspect ratio sizes the image.
+#[test]
+fn scene_contents() {
+    let desc = mcrt::load_scene(&project_path(SCENE)).unwrap();
+    assert_eq!(desc.shapes.len(), 6, "floor, wall, two cubes, glass, panel");
+    let names: Vec<&str> = desc.cameras.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(names, ["MainCam", "Lens"]);
+    assert_eq!(
+        (desc.settings.width, desc.settings.height),
+        (Some(512), Some(341))
+    );
+    assert_eq!(desc.lights.len(), 1);
+    assert_eq!(
+        desc.shapes.iter().filter(|s| s.emission.is_some()).count(),
+        1
+    );
+    assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
+}
+
+fn render_scene(spp: u32) -> Rendered {
+    let (scene, fs) = load(SCENE);
+    let s = settings(
+        &fs,
+        FileSettings {
+            spp: Some(spp),
+            width: Some(96),
+            height: Some(64),
+            ..Default::default()
+        },
+    );
+    render_with(&scene, &s)
+}
+
+/// The glTF render against Mitsuba 3's renders of its twins.
+///
+/// twin-principled.xml places the meshes by world matrices that make_scene.py computes from
+/// the specification, with Mitsuba's `principled` BSDF, which renders glTF materials
+/// (docs/gltf.md): the render must equal it up to noise, so the axes, the camera, the
+/// winding, the light units, the texture coordinates and KHR_texture_transform agree.
+///
+/// twin.xml renders the same materials with the rough conductor, dielectric and plastic
+/// BSDFs of the earlier mapping: each block may differ from it by the BRDF difference,
+/// measured between the two Mitsuba renders, plus noise; and the image as a whole by at
+/// most 3 % (between the two Mitsuba renders: 1.5 % as a whole, median block 1.4 %, largest
+/// 6.6 %, 2026-12-03).
+#[test]
+fn renders_like_its_mitsuba_twins() {
+    let r = render_scene(256);
+    let twin = BlockComparison::new(&r, &reference("gltf-twin-principled.exr"), 8, 4096);
+    twin.assert_within_noise(SCENE);
+    let pr = BlockComparison::new(&r, &reference("gltf-twin.exr"), 8, 4096);
+    let n = twin.mine.len();
+    for i in 0..n {
+        let brdf = (twin.reference[i] - pr.reference[i]).abs();
+        let noise = Z * (twin.sigma[i].powi(2) + pr.sigma[i].powi(2)).sqrt();
+        let diff = (pr.mine[i] - pr.reference[i]).abs();
+        assert!(
+            diff <= brdf + noise,
+            "block {i}: mcrt {:.4} vs the rough-BSDF twin {:.4}: beyond the BRDF difference {brdf:.4} \
+             plus noise {noise:.4}",
+            pr.mine[i],
+            pr.reference[i]
+        );
+    }
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let rel = (mean(&pr.mine) / mean(&pr.reference) - 1.0).abs();
+    let median = {
+        let mut d: Vec<f64> = (0..n)
+            .filter(|&i| pr.reference[i] > 0.01)
+            .map(|i| (pr.mine[i] / pr.reference[i] - 1.0).abs())
+            .collect();
+        d.sort_by(f64::total_cmp);
+        d[d.len() / 2]
+    };
+    eprintln!(
+        "against the rough-BSDF twin: image mean {:.2} %, median block {:.2} %",
+        100.0 * rel,
+        100.0 * median
+    );
+    assert!(
+        rel < 0.03,
+        "the image mean differs from the rough-BSDF twin's by {:.2} %",
+        100.0 * rel
+    );
+}
+
+/// A one-triangle glTF with a camera and an emissive material; `camera` is the camera
+/// object, `material` the material, `extra` more top-level members (each with a leading
+/// comma) and `nodes` more nodes after the two (mesh, camera).
+fn triangle(camera: &str, material: &str, nodes: &str, extra: &str) -> String {
+    format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0,
+ "scenes": [{{"nodes": [0, 1{roots}]}}],
+ "nodes": [{{"mesh": 0}}, {{"name": "Cam", "camera": 0, "translation": [0, 0, 3]}}{nodes}],
+ "cameras": [{camera}],
+ "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1, "material": 0}}]}}],
+ "materials": [{material}],
+ "buffers": [{{"uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAABAAIAAAA=", "byteLength": 44}}],
+ "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": 36}}, {{"buffer": 0, "byteOffset": 36, "byteLength": 6}}],
+ "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}},
+               {{"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}}]{extra}}}"#,
+        roots = if nodes.is_empty() { "" } else { ", 2" },
+    )
+}
+
+const PERSPECTIVE: &str = r#"{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1}}"#;
+const EMISSIVE: &str = r#"{"emissiveFactor": [1, 1, 1]}"#;
+
+fn parse(json: &str, lenient: bool) -> Result<mcrt::scene::SceneDesc, mcrt::scene::SceneError> {
+    mcrt::scene::gltf::parse_gltf(std::path::Path::new("t.gltf"), json.as_bytes(), lenient)
+}
+
+/// An orthographic camera: parallel rays along −z; `xmag/ymag` sizes the image.
+#[test]
+fn orthographic_camera() {
+    let cam = r#"{"type": "orthographic", "orthographic": {"xmag": 3, "ymag": 2, "znear": 0.5, "zfar": 100}}"#;
+    let desc = parse(&triangle(cam, EMISSIVE, "", ""), false).unwrap();
+    match &desc.cameras[0].1 {
+        mcrt::camera::CameraDesc::Orthographic {
+            center,
+            half_x,
+            half_y,
+            dir,
+        } => {
+            assert_eq!(*dir, glam::Vec3::NEG_Z);
+            assert_eq!(*center, glam::Vec3::new(0.0, 0.0, 2.5));
+            assert_eq!(*half_x, glam::Vec3::new(-3.0, 0.0, 0.0));
+            assert_eq!(*half_y, glam::Vec3::new(0.0, 3.0, 0.0));
+        }
+        c => panic!("not orthographic: {c:?}"),
+    }
+    assert_eq!(
+        (desc.settings.width, desc.settings.height),
+        (Some(512), Some(341))
+    );
+}
+
+/// Approximations are refused by default, naming the first and counting the rest; with
+/// `--lenient` each is one warning line. A spot light (default cone: 0° to 45°) is exact.
+#[test]
+fn approximations_refused_unless_lenient() {
+    let mat = r#"{"emissiveFactor": [1, 1, 1], "pbrMetallicRoughness": {"metallicFactor": 0.3},
+        "extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 1.0},
+                       "KHR_materials_sheen": {"sheenColorFactor": [1, 1, 1]}}}"#;
+    let lights = r#", "extensions": {"KHR_lights_punctual": {"lights": [{"type": "spot", "spot": {}, "intensity": 683}]}}"#;
+    let node = r#", {"extensions": {"KHR_lights_punctual": {"light": 0}}}"#;
+    let json = triangle(PERSPECTIVE, mat, node, lights);
+    let err = parse(&json, false).unwrap_err().to_string();
+    assert!(err.contains("the clearcoat layer is ignored"), "{err}");
+    assert!(
+        err.contains("(and 1 more)") && err.contains("--lenient"),
+        "{err}"
+    );
+    let desc = parse(&json, true).unwrap();
+    let approx: Vec<&String> = desc
+        .warnings
+        .iter()
+        .filter(|w| w.contains("approximated:"))
+        .collect();
+    assert_eq!(approx.len(), 2, "{:?}", desc.warnings);
+    assert!(approx.iter().any(|w| w.contains("sheen")));
+    // The spot light is Mitsuba's spot; its edge's falloff is a note in both modes.
+    assert!(desc.warnings.iter().any(|w| w.contains("fades linearly")));
+    assert!(matches!(
+        desc.lights[0],
+        mcrt::scene::desc::LightDesc::Spot { cutoff_angle, beam_width, .. }
+            if (cutoff_angle - 45.0).abs() < 1e-4 && beam_width == 0.0
+    ));
+}
+
+/// A normal texture becomes the material's normal map (linear values, glTF's `scale` on x
+/// and y); a material without one has none.
+#[test]
+fn normal_texture_is_a_normal_map() {
+    let png = "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAIAAACQd1PeAAAADElEQVR4nGNoaPgPAAODAgAApfuJAAAAAElFTkSuQmCC";
+    let mat = r#"{"emissiveFactor": [1, 1, 1], "normalTexture": {"index": 0, "scale": 0.5}}"#;
+    let extra = format!(
+        r#", "textures": [{{"source": 0}}], "images": [{{"uri": "data:image/png;base64,{png}"}}]"#
+    );
+    let desc = parse(&triangle(PERSPECTIVE, mat, "", &extra), false).unwrap();
+    let t = desc.materials[0].normal_map.expect("a normal map") as usize;
+    // The 1×1 image is (128, 128, 255): x, y near 0 stay there; z = 1.
+    let c = desc.textures[t].eval(glam::Vec2::splat(0.5));
+    assert!(
+        (c.x - 0.5).abs() < 0.01 && (c.y - 0.5).abs() < 0.01 && c.z == 1.0,
+        "{c}"
+    );
+    let plain = parse(&triangle(PERSPECTIVE, EMISSIVE, "", ""), false).unwrap();
+    assert!(plain.materials[0].normal_map.is_none());
+}
