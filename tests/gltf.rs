@@ -25,12 +25,33 @@ fn gltf_glb_and_embedded_load_the_same_scene() {
     assert_eq!(a, described("tests/data/gltf/scene_embedded.gltf"));
 }
 
-/// The scene's contents: the mesh used by two nodes is copied, the camera is named by its
-/// node and by itself, and the aspect ratio sizes the image.
+/// The scene's contents: the mesh used by two nodes is one shape group placed by two
+/// instances (at the nodes' world matrices), the camera is named by its node and by itself,
+/// and the aspect ratio sizes the image.
 #[test]
 fn scene_contents() {
     let desc = mcrt::load_scene(&project_path(SCENE)).unwrap();
-    assert_eq!(desc.shapes.len(), 6, "floor, wall, two cubes, glass, panel");
+    assert_eq!(desc.shapes.len(), 4, "floor, wall, glass, panel");
+    assert_eq!(desc.groups.len(), 1, "the cube");
+    assert_eq!(desc.groups[0].shapes.len(), 1);
+    assert!(
+        desc.groups[0].name.contains("cube"),
+        "{}",
+        desc.groups[0].name
+    );
+    assert_eq!(desc.instances.len(), 2, "CubeA and CubeB");
+    assert!(desc.instances.iter().all(|i| i.group == 0));
+    // CubeA: Group (translation (−0.4, 0, 0.2), scale 0.8) × CubeA (translation
+    // (−0.6, 0.5, 0), 30° about +y): its origin lands at (−0.88, 0.4, 0.2).
+    let o = desc.instances[0]
+        .to_world
+        .transform_point3(glam::Vec3::ZERO);
+    assert!(
+        (o - glam::Vec3::new(-0.88, 0.4, 0.2)).length() < 1e-5,
+        "{o}"
+    );
+    let det = desc.instances[1].to_world.matrix3.determinant();
+    assert!((det - 0.8f32.powi(3)).abs() < 1e-5, "{det}");
     let names: Vec<&str> = desc.cameras.iter().map(|(n, _)| n.as_str()).collect();
     assert_eq!(names, ["MainCam", "Lens"]);
     assert_eq!(
@@ -215,4 +236,32 @@ fn normal_texture_is_a_normal_map() {
     );
     let plain = parse(&triangle(PERSPECTIVE, EMISSIVE, "", ""), false).unwrap();
     assert!(plain.materials[0].normal_map.is_none());
+}
+
+/// A mesh used by two nodes is instanced, unless it emits (groups may not) or a node mirrors
+/// it (glTF reverses the winding there): then each node gets a copy.
+#[test]
+fn reused_meshes_are_instanced_unless_emissive_or_mirrored() {
+    let light = r#", "extensions": {"KHR_lights_punctual": {"lights": [{"type": "point", "intensity": 683}]}}"#;
+    let second = |t: &str| {
+        format!(
+            r#", {{"mesh": 0, {t}, "children": [3]}}, {{"extensions": {{"KHR_lights_punctual": {{"light": 0}}}}}}"#
+        )
+    };
+    let moved = second(r#""translation": [2, 0, 0]"#);
+    let desc = parse(&triangle(PERSPECTIVE, "{}", &moved, light), false).unwrap();
+    assert_eq!((desc.shapes.len(), desc.groups.len()), (0, 1));
+    let at: Vec<glam::Vec3> = desc
+        .instances
+        .iter()
+        .map(|i| i.to_world.transform_point3(glam::Vec3::X))
+        .collect();
+    assert_eq!(at, [glam::Vec3::X, glam::Vec3::new(3.0, 0.0, 0.0)]);
+    let mirrored = second(r#""scale": [-1, 1, 1]"#);
+    let desc = parse(&triangle(PERSPECTIVE, "{}", &mirrored, light), false).unwrap();
+    assert_eq!((desc.shapes.len(), desc.groups.len()), (2, 0));
+    assert!(desc.instances.is_empty());
+    let desc = parse(&triangle(PERSPECTIVE, EMISSIVE, &moved, light), false).unwrap();
+    assert_eq!((desc.shapes.len(), desc.groups.len()), (2, 0));
+    assert!(desc.shapes.iter().all(|s| s.emission.is_some()));
 }

@@ -1,29 +1,114 @@
 //! Meshes (glTF 2.0 §3.7.2): each primitive becomes a triangle mesh in world space, with its
 //! vertex normals (NORMAL) and texture coordinates (TEXCOORD_0) where it has them; a
-//! primitive without normals is flat-shaded, as the specification asks. A mesh that several
-//! nodes use is copied for each (flattened instancing).
+//! primitive without normals is flat-shaded, as the specification asks.
+//!
+//! A mesh that several nodes use becomes one shape group (its primitives, with their
+//! materials, in the mesh's space; see [`crate::scene::instance`]) and one instance per node,
+//! placed by the node's world matrix. It is copied into world space instead where a group
+//! cannot hold it or place it as the file means: a mesh used once; an emissive mesh (groups
+//! may not emit); a node whose world matrix is singular, or mirrors (its determinant is
+//! negative: glTF reverses the winding there, §3.7.2.1, and the normal map's tangent frame
+//! follows the world-space winding, which the copy reproduces).
 
+use super::nodes::Placed;
 use super::Loader;
 use crate::geometry::mesh::TriangleMesh;
-use crate::scene::desc::{GeometryDesc, ShapeDesc, MAX_PRIMITIVES};
+use crate::scene::desc::{GeometryDesc, GroupDesc, InstanceDesc, ShapeDesc, MAX_PRIMITIVES};
 use crate::scene::SceneError;
 use ::gltf::mesh::{Mode, Semantic};
-use glam::{Mat4, Vec2, Vec3};
+use glam::{Affine3A, Mat4, Vec2, Vec3};
 
-pub fn add_mesh(l: &mut Loader, mesh: &::gltf::Mesh, world: &Mat4) -> Result<(), SceneError> {
+/// Whether a node with this world matrix may place an instance (see the module's comment).
+fn can_place(world: &Mat4) -> bool {
+    let a = Affine3A::from_mat4(*world);
+    crate::scene::instance::singular(&a).is_none() && a.matrix3.determinant() > 0.0
+}
+
+/// Counts, for each mesh, the nodes that use it and can place an instance of it.
+pub fn count_uses(l: &mut Loader, placed: &[Placed]) {
+    for p in placed {
+        if let Some(mesh) = p.node.mesh() {
+            if can_place(&p.world) {
+                *l.mesh_uses.entry(mesh.index()).or_default() += 1;
+            }
+        }
+    }
+}
+
+/// Adds a node's mesh: an instance of its group if several nodes use it, else a copy.
+pub fn place_mesh(l: &mut Loader, mesh: &::gltf::Mesh, world: &Mat4) -> Result<(), SceneError> {
+    let reused = l.mesh_uses.get(&mesh.index()).is_some_and(|&n| n > 1);
+    if reused && can_place(world) {
+        if let Some(group) = group(l, mesh)? {
+            l.desc.instances.push(InstanceDesc {
+                group,
+                to_world: Affine3A::from_mat4(*world),
+            });
+            return Ok(());
+        }
+    }
+    add_mesh(l, mesh, world)
+}
+
+/// The mesh's shape group, read on first use; None if a primitive emits (or none is a
+/// surface): such a mesh is copied.
+fn group(l: &mut Loader, mesh: &::gltf::Mesh) -> Result<Option<u32>, SceneError> {
+    if let Some(&g) = l.mesh_groups.get(&mesh.index()) {
+        return Ok(g);
+    }
+    let mut emits = false;
+    for prim in mesh.primitives() {
+        emits |= l.material(&prim.material())?.1.is_some();
+    }
+    let mut shapes = Vec::new();
+    for prim in mesh.primitives().filter(|_| !emits) {
+        let material = l.material(&prim.material())?.0;
+        let what = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
+        let Some(tm) = read_primitive(l, &prim, &what)? else {
+            continue;
+        };
+        count(l, &tm, &what)?;
+        shapes.push(ShapeDesc {
+            geometry: GeometryDesc::Mesh(tm),
+            material,
+            emission: None,
+        });
+    }
+    let g = if shapes.is_empty() {
+        None
+    } else {
+        let name = match mesh.name() {
+            Some(n) => format!("meshes[{}] ('{}')", mesh.index(), crate::input::shorten(n)),
+            None => format!("meshes[{}]", mesh.index()),
+        };
+        l.desc.groups.push(GroupDesc { name, shapes });
+        Some(l.desc.groups.len() as u32 - 1)
+    };
+    l.mesh_groups.insert(mesh.index(), g);
+    Ok(g)
+}
+
+/// Counts a primitive's triangles and vertices, refusing more than the scene can hold.
+fn count(l: &mut Loader, tm: &TriangleMesh, what: &str) -> Result<(), SceneError> {
+    l.triangles += tm.indices.len();
+    l.vertices += tm.positions.len();
+    if l.triangles > MAX_PRIMITIVES {
+        return Err(l.err(format!(
+            "{what}: the scene's meshes, one copy per node that uses them (one per shape \
+             group for instanced ones), have more than {MAX_PRIMITIVES} triangles"
+        )));
+    }
+    Ok(())
+}
+
+/// Adds a copy of the mesh's primitives placed in world space by `world`.
+fn add_mesh(l: &mut Loader, mesh: &::gltf::Mesh, world: &Mat4) -> Result<(), SceneError> {
     for prim in mesh.primitives() {
         let what = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
         let Some(mut tm) = read_primitive(l, &prim, &what)? else {
             continue;
         };
-        l.triangles += tm.indices.len();
-        l.vertices += tm.positions.len();
-        if l.triangles > MAX_PRIMITIVES {
-            return Err(l.err(format!(
-                "{what}: the scene's meshes, one copy per node that uses them, have more than \
-                 {MAX_PRIMITIVES} triangles"
-            )));
-        }
+        count(l, &tm, &what)?;
         tm.transform(world);
         if tm.positions.iter().any(|p| !p.is_finite()) {
             return Err(l.err(format!(

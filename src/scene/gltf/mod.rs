@@ -54,9 +54,13 @@ pub(super) struct Loader<'a> {
     pub images: std::collections::HashMap<(usize, bool), std::sync::Arc<crate::texture::Bitmap>>,
     /// Each glTF material's mcrt material and emission (None: the default material).
     pub material_cache: std::collections::HashMap<Option<usize>, (u32, Option<Color>)>,
-    /// Triangles and vertices flattened so far (instances are copies).
+    /// Triangles and vertices read so far (a shape group's once).
     pub triangles: usize,
     pub vertices: usize,
+    /// How many nodes that can place an instance use each mesh (see [`meshes`]).
+    pub mesh_uses: std::collections::HashMap<usize, usize>,
+    /// Each reused mesh's shape group (None: it emits, and is copied instead).
+    pub mesh_groups: std::collections::HashMap<usize, Option<u32>>,
 }
 
 impl Loader<'_> {
@@ -98,15 +102,18 @@ pub fn parse_gltf(path: &Path, bytes: &[u8], lenient: bool) -> Result<SceneDesc,
         material_cache: Default::default(),
         triangles: 0,
         vertices: 0,
+        mesh_uses: Default::default(),
+        mesh_groups: Default::default(),
     };
     let scene = doc
         .default_scene()
         .or_else(|| doc.scenes().next())
         .ok_or_else(|| l.err("the file has no scene (its 'scenes' array is empty)"))?;
     let placed = nodes::flatten(&l, &scene)?;
+    meshes::count_uses(&mut l, &placed);
     for p in &placed {
         if let Some(mesh) = p.node.mesh() {
-            meshes::add_mesh(&mut l, &mesh, &p.world)?;
+            meshes::place_mesh(&mut l, &mesh, &p.world)?;
         }
         if let Some(cam) = p.node.camera() {
             cameras::add_camera(&mut l, &p.node, &cam, &p.world)?;
