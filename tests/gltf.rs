@@ -265,3 +265,77 @@ fn reused_meshes_are_instanced_unless_emissive_or_mirrored() {
     assert_eq!((desc.shapes.len(), desc.groups.len()), (2, 0));
     assert!(desc.shapes.iter().all(|s| s.emission.is_some()));
 }
+
+/// A 2×1 PNG: texels (51, 102, 204) and (255, 25, 0), sampled nearest, as glTF textures
+/// 0 (`extra` members for [`triangle`]).
+const TWO_TEXELS: &str = r#", "textures": [{"source": 0, "sampler": 0}], "samplers": [{"magFilter": 9728}],
+ "images": [{"uri": "data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAIAAAABCAIAAAB7QOjdAAAAD0lEQVR4nGMwTjvzX5IBAAmWAn4aWbVmAAAAAElFTkSuQmCC"}]"#;
+
+/// The uv of each texel of [`TWO_TEXELS`].
+const TEXELS: [glam::Vec2; 2] = [glam::Vec2::new(0.25, 0.5), glam::Vec2::new(0.75, 0.5)];
+
+/// metallicRoughnessTexture (B metalness, G roughness, linear) and KHR_materials_transmission's
+/// texture (R) are bound to principled's `metallic`, `roughness` and `spec_trans` slots: at
+/// a hit they take the texel's channel times the factor; the BSDF's constant is the mean.
+#[test]
+fn metallic_roughness_and_transmission_textures_are_exact() {
+    let mat = r#"{"emissiveFactor": [1, 1, 1],
+        "pbrMetallicRoughness": {"metallicFactor": 0.5, "metallicRoughnessTexture": {"index": 0}},
+        "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0, "transmissionTexture": {"index": 0}}}}"#;
+    let desc = parse(&triangle(PERSPECTIVE, mat, "", TWO_TEXELS), false).unwrap();
+    assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
+    let principled = |m: &mcrt::material::Material| match &m.bsdf {
+        mcrt::material::Bsdf::Principled(b) => {
+            glam::Vec3::new(b.metallic, b.roughness, b.spec_trans)
+        }
+        b => panic!("not principled: {b:?}"),
+    };
+    let m = &desc.materials[0];
+    // (metallic, roughness, spec_trans) at each texel.
+    let want = [
+        glam::Vec3::new(0.5 * 204.0 / 255.0, 102.0 / 255.0, 51.0 / 255.0),
+        glam::Vec3::new(0.0, 25.0 / 255.0, 1.0),
+    ];
+    for (uv, w) in TEXELS.iter().zip(want) {
+        let got = principled(&m.at(&desc.materials, &desc.textures, *uv));
+        assert!(got.abs_diff_eq(w, 1e-5), "at {uv}: {got}, want {w}");
+    }
+    let c = principled(m);
+    let mean = 0.5 * (want[0] + want[1]);
+    assert!(c.abs_diff_eq(mean, 1e-5), "constants {c}, want {mean}");
+}
+
+/// An emissive texture makes the area light's radiance a texture (sRGB) times emissiveFactor
+/// × emissive strength; the shape's emission is its mean.
+#[test]
+fn emissive_texture_is_the_lights_radiance() {
+    let mat = r#"{"emissiveFactor": [1, 0.5, 1], "emissiveTexture": {"index": 0},
+        "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 2}}}"#;
+    let desc = parse(&triangle(PERSPECTIVE, mat, "", TWO_TEXELS), false).unwrap();
+    assert!(desc.warnings.is_empty(), "{:?}", desc.warnings);
+    let [(0, t)] = desc.emission_textures[..] else {
+        panic!("{:?}", desc.emission_textures)
+    };
+    let tex = &desc.textures[t as usize];
+    let srgb = |c: f32| {
+        let c = c / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let scale = mcrt::Color::new(2.0, 1.0, 2.0);
+    for (uv, px) in TEXELS
+        .iter()
+        .zip([[51.0, 102.0, 204.0], [255.0, 25.0, 0.0]])
+    {
+        let want = scale * mcrt::Color::new(srgb(px[0]), srgb(px[1]), srgb(px[2]));
+        let got = tex.eval(*uv);
+        assert!(
+            (got - want).abs().max_element() < 1e-3,
+            "at {uv}: {got}, want {want}"
+        );
+    }
+    assert_eq!(desc.shapes[0].emission, Some(tex.mean()));
+}

@@ -7,14 +7,15 @@
 //! it onto mcrt's BSDFs; docs/gltf.md says how each choice differs from Appendix B.
 
 use super::Loader;
+use crate::material::textured::{slots, Binding, Slot};
 use crate::material::{Bsdf, Material, Principled};
 use crate::scene::SceneError;
 use crate::texture::{Bitmap, BitmapTexture, FilterType, Texture, UvTransform, WrapMode};
 use crate::Color;
 use std::sync::Arc;
 
-/// A glTF material's parameters, with textures other than the base colour's reduced to
-/// their means.
+/// A glTF material's parameters; where a texture varies one, its mean (the constant the
+/// BSDF is built with, [`crate::material::textured`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pbr {
     pub base: Color,
@@ -54,10 +55,46 @@ pub fn bsdf_for(p: &Pbr) -> Bsdf {
     })
 }
 
+/// What an emissive material emits: the radiance, or its mean where `texture` (an index
+/// into the scene's textures, `SceneDesc::emission_textures`) gives it over the surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Emission {
+    pub radiance: Color,
+    pub texture: Option<u32>,
+}
+
+/// How a texture's pixels p become the values a slot reads.
+#[derive(Clone, Copy, Debug)]
+enum Map {
+    /// p·mul + add, clamped at 0.
+    Affine(Color, Color),
+    /// One channel (0 = R, 1 = G, 2 = B) times a factor, clamped to [0, 1], as a grey image,
+    /// which a float slot reads exactly (`Texture::eval_1` of a grey bitmap is its value).
+    Channel(usize, f32),
+}
+
+impl Map {
+    fn apply(self, p: Color) -> Color {
+        match self {
+            Map::Affine(mul, add) => (p * mul + add).max(Color::ZERO),
+            Map::Channel(c, f) => Color::splat((p[c] * f).clamp(0.0, 1.0)),
+        }
+    }
+}
+
+/// The slots of the principled parameters glTF textures: glTF's metalness, roughness and
+/// transmission are principled's `metallic`, `roughness` and `spec_trans` ([`bsdf_for`]).
+const METALLIC: Slot = crate::slot!(Float, Principled, |b, v| b.metallic = v);
+const ROUGHNESS: Slot = crate::slot!(Float, Principled, |b, v| b.roughness = v);
+const SPEC_TRANS: Slot = crate::slot!(Float, Principled, |b, v| b.spec_trans = v);
+
 impl Loader<'_> {
-    /// The mcrt material (index into the scene's) and the emitted radiance of a glTF
-    /// material, made once per material.
-    pub fn material(&mut self, m: &::gltf::Material) -> Result<(u32, Option<Color>), SceneError> {
+    /// The mcrt material (index into the scene's) and the emission of a glTF material, made
+    /// once per material.
+    pub fn material(
+        &mut self,
+        m: &::gltf::Material,
+    ) -> Result<(u32, Option<Emission>), SceneError> {
         if let Some(&done) = self.material_cache.get(&m.index()) {
             return Ok(done);
         }
@@ -66,19 +103,9 @@ impl Loader<'_> {
             (Some(i), None) => format!("materials[{i}]"),
             (None, _) => "the default material".to_string(),
         };
-        let (pbr, base_tex) = self.pbr(m, &what)?;
+        let (pbr, slots) = self.pbr(m, &what)?;
         let mut mat = Material::new(bsdf_for(&pbr), m.double_sided());
-        if let Some(info) = base_tex {
-            let factor = Color::from_slice(&m.pbr_metallic_roughness().base_color_factor()[..3]);
-            let w = format!("{what}.baseColorTexture");
-            if let Some(texture) = self.texture(&info, false, (factor, Color::ZERO), &w)? {
-                mat.slots = vec![crate::material::textured::Binding {
-                    texture,
-                    slot: crate::material::textured::slots::MAIN_COLOR,
-                }]
-                .into_boxed_slice();
-            }
-        }
+        mat.slots = slots.into_boxed_slice();
         if let Some(n) = m.normal_texture() {
             mat.normal_map = self.normal_texture(&n, &what)?;
         }
@@ -89,12 +116,9 @@ impl Loader<'_> {
         Ok((index, emission))
     }
 
-    /// The material's parameters, and its base colour texture.
-    fn pbr<'b>(
-        &mut self,
-        m: &::gltf::Material<'b>,
-        what: &str,
-    ) -> Result<(Pbr, Option<::gltf::texture::Info<'b>>), SceneError> {
+    /// The material's parameters (textured ones at their means), and the bindings of its
+    /// textures: the base colour, metalness (B), roughness (G) and transmission (R).
+    fn pbr(&mut self, m: &::gltf::Material, what: &str) -> Result<(Pbr, Vec<Binding>), SceneError> {
         let mr = m.pbr_metallic_roughness();
         let f = mr.base_color_factor();
         let mut p = Pbr {
@@ -104,31 +128,46 @@ impl Loader<'_> {
             ior: m.ior().unwrap_or(1.5),
             ..Pbr::default()
         };
-        let base_tex = mr.base_color_texture();
-        if let Some(info) = &base_tex {
-            if let Some(mean) =
-                self.texture_mean(info, false, &format!("{what}.baseColorTexture"))?
-            {
-                p.base *= mean;
-            }
-        }
-        if let Some(info) = mr.metallic_roughness_texture() {
-            let w = format!("{what}.metallicRoughnessTexture");
-            if let Some(mean) = self.texture_mean(&info, true, &w)? {
-                // B is metalness, G roughness (§3.9.2).
-                p.metallic *= mean.z;
-                p.roughness *= mean.y;
-                self.approximate(format!(
-                    "{w}: metalness and roughness vary over the surface; rendered with their \
-                     means ({:.2}, {:.2})",
-                    p.metallic, p.roughness
-                ));
-            }
-        }
         if let Some(t) = m.transmission() {
             p.transmission = t.transmission_factor();
-            if t.transmission_texture().is_some() {
-                self.approximate(format!("{what}: the transmission texture is ignored"));
+        }
+        // Factors are checked before they scale textures.
+        self.check_pbr(&p, what)?;
+        let mut slots = Vec::new();
+        let mut bind = |l: &mut Self, info: Option<::gltf::texture::Info>, map, slot, name| {
+            let Some(info) = info else {
+                return Ok(None);
+            };
+            let w = format!("{what}.{name}");
+            let raw = !matches!(slot, Slot::Color(_));
+            let Some(texture) = l.texture(&info, raw, map, &w)? else {
+                return Ok(None);
+            };
+            slots.push(Binding { texture, slot });
+            Ok::<_, SceneError>(Some(l.desc.textures[texture as usize].mean()))
+        };
+        let base = Map::Affine(p.base, Color::ZERO);
+        let tex = mr.base_color_texture();
+        if let Some(mean) = bind(self, tex, base, slots::MAIN_COLOR, "baseColorTexture")? {
+            p.base = mean;
+        }
+        // B is metalness, G roughness (§3.9.2); each multiplies its factor.
+        let (metal, rough) = (Map::Channel(2, p.metallic), Map::Channel(1, p.roughness));
+        let tex = mr.metallic_roughness_texture();
+        let name = "metallicRoughnessTexture";
+        if let Some(mean) = bind(self, tex.clone(), metal, METALLIC, name)? {
+            p.metallic = mean.x;
+        }
+        if let Some(mean) = bind(self, tex, rough, ROUGHNESS, name)? {
+            p.roughness = mean.x;
+        }
+        // KHR_materials_transmission: R times transmissionFactor.
+        if let Some(t) = m.transmission() {
+            let map = Map::Channel(0, p.transmission);
+            let tex = t.transmission_texture();
+            let name = "KHR_materials_transmission.transmissionTexture";
+            if let Some(mean) = bind(self, tex, map, SPEC_TRANS, name)? {
+                p.transmission = mean.x;
             }
         }
         if let Some(s) = m.specular() {
@@ -137,9 +176,8 @@ impl Loader<'_> {
                 self.approximate(format!("{what}: the specular textures are ignored"));
             }
         }
-        self.check_pbr(&p, what)?;
         self.note_unsupported(m, &p, what);
-        Ok((p, base_tex))
+        Ok((p, slots))
     }
 
     /// Refuses parameters outside their ranges (glTF 2.0 §5.19, §5.22).
@@ -205,11 +243,15 @@ impl Loader<'_> {
         }
     }
 
-    /// Emitted radiance: emissiveFactor × KHR_materials_emissive_strength, times the mean of
-    /// the emissive texture; None for black.
-    fn emission(&mut self, m: &::gltf::Material, what: &str) -> Result<Option<Color>, SceneError> {
+    /// Emitted radiance: emissiveFactor × KHR_materials_emissive_strength, times the
+    /// emissive texture (sRGB) where there is one; None for black.
+    fn emission(
+        &mut self,
+        m: &::gltf::Material,
+        what: &str,
+    ) -> Result<Option<Emission>, SceneError> {
         let strength = m.emissive_strength().unwrap_or(1.0);
-        let mut e = Color::from(m.emissive_factor()) * strength;
+        let e = Color::from(m.emissive_factor()) * strength;
         if !(e.is_finite() && e.min_element() >= 0.0) {
             return Err(self.err(format!(
                 "{what}: emissiveFactor {:?} times emissive strength {strength} must be finite \
@@ -220,13 +262,18 @@ impl Loader<'_> {
         if e == Color::ZERO {
             return Ok(None);
         }
+        let mut emission = Emission {
+            radiance: e,
+            texture: None,
+        };
         if let Some(info) = m.emissive_texture() {
             let w = format!("{what}.emissiveTexture");
-            if let Some(mean) = self.texture_mean(&info, false, &w)? {
-                e *= mean;
-                self.approximate(format!(
-                    "{w}: emission varies over the surface; rendered with its mean"
-                ));
+            let map = Map::Affine(e, Color::ZERO);
+            if let Some(t) = self.texture(&info, false, map, &w)? {
+                emission = Emission {
+                    radiance: self.desc.textures[t as usize].mean(),
+                    texture: Some(t),
+                };
             }
         }
         if m.double_sided() {
@@ -235,7 +282,7 @@ impl Loader<'_> {
                  side only"
             ));
         }
-        Ok((e != Color::ZERO).then_some(e))
+        Ok((emission.radiance != Color::ZERO).then_some(emission))
     }
 
     /// The decoded image of a texture (cached), or None with an approximation for a format
@@ -289,16 +336,6 @@ impl Loader<'_> {
         Ok(Some(b))
     }
 
-    /// The mean of a texture's image (linear), or None where it cannot be decoded.
-    fn texture_mean(
-        &mut self,
-        info: &::gltf::texture::Info,
-        raw: bool,
-        what: &str,
-    ) -> Result<Option<Color>, SceneError> {
-        Ok(self.bitmap(&info.texture(), raw, what)?.map(|b| b.mean()))
-    }
-
     /// The normal texture as Mitsuba's `normalmap` reads one: linear values c, the normal
     /// 2c − 1 in the frame (dp/du, n × dp/du, n), which is glTF's tangent space (+x along
     /// increasing u, +y towards the image's top, i.e. decreasing v) where the tangents follow
@@ -335,40 +372,31 @@ impl Loader<'_> {
         let Some(bitmap) = self.bitmap(&tex, true, &w)? else {
             return Ok(None);
         };
-        let bitmap = self.mapped(bitmap, map, &w)?;
+        let bitmap = self.mapped(bitmap, Map::Affine(map.0, map.1), &w)?;
         self.push_texture(&tex, bitmap, UvTransform::IDENTITY, &w);
         Ok(Some(self.desc.textures.len() as u32 - 1))
     }
 
-    /// The bitmap with each pixel p mapped to p·mul + add (clamped at 0).
-    fn mapped(
-        &self,
-        bitmap: Arc<Bitmap>,
-        (mul, add): (Color, Color),
-        what: &str,
-    ) -> Result<Arc<Bitmap>, SceneError> {
-        if mul == Color::ONE && add == Color::ZERO {
+    /// The bitmap with each pixel mapped by `map`.
+    fn mapped(&self, bitmap: Arc<Bitmap>, map: Map, what: &str) -> Result<Arc<Bitmap>, SceneError> {
+        if matches!(map, Map::Affine(m, a) if m == Color::ONE && a == Color::ZERO) {
             return Ok(bitmap);
         }
-        let px = bitmap
-            .pixels
-            .iter()
-            .map(|p| (*p * mul + add).max(Color::ZERO))
-            .collect();
+        let px = bitmap.pixels.iter().map(|p| map.apply(*p)).collect();
         Ok(Arc::new(
             Bitmap::from_pixels(bitmap.width, bitmap.height, px)
                 .map_err(|e| self.err(format!("{what}: {e}")))?,
         ))
     }
 
-    /// A texture for a material's main colour: the image mapped by `map` (p·mul + add), with
-    /// the sampler's filter and wrap mode and the KHR_texture_transform; its index in the
-    /// scene's textures.
+    /// A texture: the image (linear if `raw`, else sRGB) mapped by `map`, with the
+    /// sampler's filter and wrap mode and the KHR_texture_transform; its index in the scene's
+    /// textures, None where the image cannot be decoded (an approximation).
     fn texture(
         &mut self,
         info: &::gltf::texture::Info,
         raw: bool,
-        map: (Color, Color),
+        map: Map,
         what: &str,
     ) -> Result<Option<u32>, SceneError> {
         let tex = info.texture();

@@ -117,7 +117,12 @@ fn add_mesh(l: &mut Loader, mesh: &::gltf::Mesh, world: &Mat4) -> Result<(), Sce
         }
         let (material, emission) = l.material(&prim.material())?;
         let emission = match emission {
-            Some(e) if area(&tm) > 0.0 => Some(e),
+            Some(e) if area(&tm) > 0.0 => {
+                if let Some(t) = e.texture {
+                    l.desc.emission_textures.push((l.desc.shapes.len(), t));
+                }
+                Some(e.radiance)
+            }
             Some(_) => {
                 l.note(format!(
                     "{what}: emissive but of zero area: it emits nothing"

@@ -53,7 +53,8 @@ pub(super) struct Loader<'a> {
     pub lenient: bool,
     pub images: std::collections::HashMap<(usize, bool), std::sync::Arc<crate::texture::Bitmap>>,
     /// Each glTF material's mcrt material and emission (None: the default material).
-    pub material_cache: std::collections::HashMap<Option<usize>, (u32, Option<Color>)>,
+    pub material_cache:
+        std::collections::HashMap<Option<usize>, (u32, Option<materials::Emission>)>,
     /// Triangles and vertices read so far (a shape group's once).
     pub triangles: usize,
     pub vertices: usize,
