@@ -339,3 +339,17 @@ fn emissive_texture_is_the_lights_radiance() {
     }
     assert_eq!(desc.shapes[0].emission, Some(tex.mean()));
 }
+
+/// Factors are checked, KHR_materials_specular's too, before they scale any texture.
+#[test]
+fn negative_specular_factor_is_refused() {
+    let mat = r#"{"emissiveFactor": [1, 1, 1],
+        "extensions": {"KHR_materials_specular": {"specularFactor": -1}}}"#;
+    let err = parse(&triangle(PERSPECTIVE, mat, "", ""), true)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("specular") && err.contains("out of range"),
+        "{err}"
+    );
+}

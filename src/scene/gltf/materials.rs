@@ -131,6 +131,12 @@ impl Loader<'_> {
         if let Some(t) = m.transmission() {
             p.transmission = t.transmission_factor();
         }
+        if let Some(s) = m.specular() {
+            p.specular = Color::from(s.specular_color_factor()) * s.specular_factor();
+            if s.specular_texture().is_some() || s.specular_color_texture().is_some() {
+                self.approximate(format!("{what}: the specular textures are ignored"));
+            }
+        }
         // Factors are checked before they scale textures.
         self.check_pbr(&p, what)?;
         let mut slots = Vec::new();
@@ -168,12 +174,6 @@ impl Loader<'_> {
             let name = "KHR_materials_transmission.transmissionTexture";
             if let Some(mean) = bind(self, tex, map, SPEC_TRANS, name)? {
                 p.transmission = mean.x;
-            }
-        }
-        if let Some(s) = m.specular() {
-            p.specular = Color::from(s.specular_color_factor()) * s.specular_factor();
-            if s.specular_texture().is_some() || s.specular_color_texture().is_some() {
-                self.approximate(format!("{what}: the specular textures are ignored"));
             }
         }
         self.note_unsupported(m, &p, what);
