@@ -43,6 +43,7 @@ pub fn subdivide(m: &TriangleMesh, k: u32) -> TriangleMesh {
         }
     }
     TriangleMesh {
+        tangents: None,
         positions,
         normals: None,
         uvs: None,

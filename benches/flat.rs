@@ -63,6 +63,7 @@ fn room(n: usize, r: &mut Pcg32) -> SceneDesc {
     ));
     d.shapes.push(ShapeDesc {
         geometry: GeometryDesc::Mesh(TriangleMesh {
+            tangents: None,
             positions,
             normals: None,
             uvs: None,

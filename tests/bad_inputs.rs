@@ -391,6 +391,8 @@ bad_input!(
     "gltf-unsupported-extension.gltf"
 );
 bad_input!(gltf_zero_yfov_gltf, "gltf-zero-yfov.gltf");
+bad_input!(gltf_tangent_wrong_type_gltf, "gltf-tangent-wrong-type.gltf");
+bad_input!(gltf_tangent_count_gltf, "gltf-tangent-count.gltf");
 // Issue 25: cameras (thinlens, orthographic, focal_length), cylinder, serialized meshes.
 bad_input!(
     serialized_bad_magic_serialized,

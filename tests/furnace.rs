@@ -79,6 +79,7 @@ fn inward_box() -> TriangleMesh {
         indices.push([q[0], q[2], q[3]]);
     }
     TriangleMesh {
+        tangents: None,
         positions,
         normals: None,
         uvs: None,

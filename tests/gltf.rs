@@ -353,3 +353,89 @@ fn negative_specular_factor_is_refused() {
         "{err}"
     );
 }
+
+/// [`triangle`] with a TANGENT accessor: `data` is the base64 of its 44-byte buffer followed
+/// by three VEC4 tangents, `node` more members of the mesh's node.
+fn with_tangents(data: &str, node: &str, material: &str, extra: &str) -> String {
+    triangle(PERSPECTIVE, material, "", extra)
+        .replace(
+            r#"base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAABAAIAAAA=", "byteLength": 44"#,
+            &format!(r#"base64,{data}", "byteLength": 92"#),
+        )
+        .replace(r#"{"POSITION": 0}"#, r#"{"POSITION": 0, "TANGENT": 2}"#)
+        .replace(
+            r#""byteOffset": 36, "byteLength": 6}"#,
+            r#""byteOffset": 36, "byteLength": 6}, {"buffer": 0, "byteOffset": 44, "byteLength": 48}"#,
+        )
+        .replace(
+            r#""type": "SCALAR"}]"#,
+            r#""type": "SCALAR"}, {"bufferView": 2, "componentType": 5126, "count": 3, "type": "VEC4"}]"#,
+        )
+        .replace(r#""nodes": [{"mesh": 0}"#, &format!(r#""nodes": [{{"mesh": 0{node}}}"#))
+}
+
+fn mesh_tangents(desc: &mcrt::scene::SceneDesc) -> Option<Vec<glam::Vec4>> {
+    match &desc.shapes[0].geometry {
+        mcrt::scene::desc::GeometryDesc::Mesh(m) => m.tangents.clone(),
+        g => panic!("not a mesh: {g:?}"),
+    }
+}
+
+/// TANGENT (glTF 2.0 §3.7.2.1) is read per vertex and carried to world space like a
+/// direction, normalized, its bitangent sign w kept; a mirroring node flips w.
+#[test]
+fn tangents_are_read_and_transformed() {
+    // Tangents (1, 0, 0, 1), (0, 1, 0, −1), (1, 1, 0, 1).
+    let data = "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAABAAIAAAAAAIA/AAAAAAAAAAAAAIA/AAAAAAAAgD8AAAAAAACAvwAAgD8AAIA/AAAAAAAAgD8=";
+    let load = |node: &str| {
+        let desc = parse(&with_tangents(data, node, EMISSIVE, ""), false).unwrap();
+        mesh_tangents(&desc).expect("tangents")
+    };
+    let close = |a: &[glam::Vec4], b: &[glam::Vec4]| {
+        a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (*x - *y).length() < 1e-6)
+    };
+    let s = 5f32.sqrt();
+    let t = load(r#", "scale": [2, 1, 1]"#);
+    let want = [
+        glam::Vec4::new(1.0, 0.0, 0.0, 1.0),
+        glam::Vec4::new(0.0, 1.0, 0.0, -1.0),
+        glam::Vec4::new(2.0 / s, 1.0 / s, 0.0, 1.0),
+    ];
+    assert!(close(&t, &want), "{t:?}");
+    let t = load(r#", "scale": [-1, 1, 1]"#);
+    let h = 0.5f32.sqrt();
+    let want = [
+        glam::Vec4::new(-1.0, 0.0, 0.0, -1.0),
+        glam::Vec4::new(0.0, 1.0, 0.0, 1.0),
+        glam::Vec4::new(-h, h, 0.0, -1.0),
+    ];
+    assert!(close(&t, &want), "{t:?}");
+    // Without TANGENT there are none.
+    let desc = parse(&triangle(PERSPECTIVE, EMISSIVE, "", ""), false).unwrap();
+    assert!(mesh_tangents(&desc).is_none());
+}
+
+/// At a hit, a normal texture tilted 45° towards +x of tangent space tilts the shading
+/// normal towards dp/du = +x without TANGENT (no uvs: the barycentric partials, edge
+/// p1 − p0), towards the vertex tangent +y with TANGENT (0, 1, 0, 1).
+#[test]
+fn normal_map_frame_follows_tangents_at_hits() {
+    use mcrt::geometry::Ray;
+    // A 1×1 PNG of (218, 128, 218): 2c − 1 ≈ (0.71, 0, 0.71).
+    let png = "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAIAAACQd1PeAAAADElEQVR4nGO41XALAARsAjUQ4/RCAAAAAElFTkSuQmCC";
+    let mat = r#"{"emissiveFactor": [1, 1, 1], "normalTexture": {"index": 0}}"#;
+    let extra = format!(
+        r#", "textures": [{{"source": 0}}], "images": [{{"uri": "data:image/png;base64,{png}"}}]"#
+    );
+    let data = "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAABAAIAAAAAAAAAAACAPwAAAAAAAIA/AAAAAAAAgD8AAAAAAACAPwAAAAAAAIA/AAAAAAAAgD8=";
+    let shading_normal = |json: &str| {
+        let scene = mcrt::scene::Scene::build(parse(json, false).unwrap());
+        let ray = Ray::new(glam::Vec3A::new(0.25, 0.25, 3.0), glam::Vec3A::NEG_Z);
+        scene.intersect(&ray).expect("a hit").ns
+    };
+    let h = 0.5f32.sqrt();
+    let n = shading_normal(&triangle(PERSPECTIVE, mat, "", &extra));
+    assert!((n - glam::Vec3A::new(h, 0.0, h)).length() < 0.01, "{n}");
+    let n = shading_normal(&with_tangents(data, "", mat, &extra));
+    assert!((n - glam::Vec3A::new(0.0, h, h)).length() < 0.01, "{n}");
+}

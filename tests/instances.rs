@@ -89,6 +89,7 @@ fn uv_sphere(rings: u32, segments: u32) -> TriangleMesh {
         }
     }
     TriangleMesh {
+        tangents: None,
         positions,
         normals: Some(normals),
         uvs: Some(uvs),

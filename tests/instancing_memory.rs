@@ -46,6 +46,7 @@ fn terrain(triangles: usize) -> TriangleMesh {
         }
     }
     TriangleMesh {
+        tangents: None,
         positions,
         normals: Some(normals),
         uvs: None,

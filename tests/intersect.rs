@@ -77,6 +77,7 @@ fn material() -> Material {
 fn mesh_shape(positions: Vec<Vec3>, indices: Vec<[u32; 3]>) -> ShapeDesc {
     ShapeDesc {
         geometry: GeometryDesc::Mesh(TriangleMesh {
+            tangents: None,
             positions,
             normals: None,
             uvs: None,

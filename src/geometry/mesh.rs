@@ -9,6 +9,10 @@ pub struct TriangleMesh {
     pub normals: Option<Vec<Vec3>>,
     /// Per-vertex texture coordinates, if the file gave them.
     pub uvs: Option<Vec<glam::Vec2>>,
+    /// Per-vertex tangents (glTF's TANGENT: xyz the unit tangent, w = ±1 the sign of the
+    /// bitangent n × t), where a normal map's tangent frame follows them instead of the
+    /// texture coordinates' dp/du.
+    pub tangents: Option<Vec<glam::Vec4>>,
     pub indices: Vec<[u32; 3]>,
 }
 
@@ -38,16 +42,23 @@ impl TriangleMesh {
             positions,
             normals: None,
             uvs: Some(uvs),
+            tangents: None,
             indices: (0..n).map(|i| [0, 1 + i, 1 + (i + 1) % n]).collect(),
         }
     }
 
     /// v ↦ 1 − v: OBJ files put v = 0 at the bottom of an image, Mitsuba's textures at the
-    /// top (Mitsuba's `flip_tex_coords`, on by default).
+    /// top (Mitsuba's `flip_tex_coords`, on by default). Tangents keep following u; their
+    /// bitangent sign follows v.
     pub fn flip_v(&mut self) {
         if let Some(uvs) = &mut self.uvs {
             for t in uvs {
                 t.y = 1.0 - t.y;
+            }
+        }
+        if let Some(ts) = &mut self.tangents {
+            for t in ts {
+                t.w = -t.w;
             }
         }
     }
@@ -76,7 +87,10 @@ impl TriangleMesh {
         self.indices.len()
     }
 
-    /// Applies an affine map to positions and the matching normal map to normals.
+    /// Applies an affine map to positions, the matching normal map to normals, and its
+    /// linear part to tangents (directions in the surface); a mirroring map (negative
+    /// determinant) flips the tangents' bitangent sign, since n × t then turns the other way
+    /// relative to the mapped bitangent.
     pub fn transform(&mut self, m: &glam::Mat4) {
         for p in &mut self.positions {
             *p = m.transform_point3(*p);
@@ -85,6 +99,14 @@ impl TriangleMesh {
             let nm = glam::Mat3::from_mat4(*m).inverse().transpose();
             for n in ns {
                 *n = (nm * *n).normalize_or_zero();
+            }
+        }
+        if let Some(ts) = &mut self.tangents {
+            let lin = glam::Mat3::from_mat4(*m);
+            let sign = if m.determinant() < 0.0 { -1.0 } else { 1.0 };
+            for t in ts {
+                let d = (lin * t.truncate()).normalize_or_zero();
+                *t = d.extend(t.w * sign);
             }
         }
         // A transform with negative determinant turns the mesh inside out; keep the normals

@@ -34,6 +34,25 @@ pub struct HitGeometry {
     pub uv: Vec2,
     /// Unit direction towards the viewer (Mitsuba's `si.wi`).
     pub wi: Vec3A,
+    /// ±1: the normal map's bitangent is sign · (n × tangent) (glTF's TANGENT.w; +1 for
+    /// tangents from dp/du).
+    pub bitangent_sign: f32,
+}
+
+impl HitGeometry {
+    /// The hit with a normal map's tangent frame following the interpolated vertex tangent
+    /// `t` (glTF 2.0 §3.7.2.1 TANGENT: xyz the tangent, the sign of w the bitangent's)
+    /// instead of dp/du, which stays where `t` has no component orthogonal to the normal.
+    /// A bump map still reads dp/du and dp/dv.
+    pub fn with_tangent(mut self, t: glam::Vec4) -> HitGeometry {
+        let d = Vec3A::from(t.truncate());
+        let s = d - self.ns * self.ns.dot(d);
+        if s.length_squared() > 0.0 && s.is_finite() {
+            self.dpdu = d;
+            self.bitangent_sign = if t.w < 0.0 { -1.0 } else { 1.0 };
+        }
+        self
+    }
 }
 
 /// Rec. 709 luminance: how Mitsuba reads an RGB texture as one number (`eval_1`).
@@ -66,9 +85,12 @@ pub fn perturbed_normal(
     let n = if let Some(t) = normal_map {
         // normalmap.cpp, frame(): the texture's colour c is the normal 2c − 1 in the
         // shading frame (dp/du made orthogonal to ns, ns × that, ns).
+        // A vertex tangent's sign w flips the bitangent (glTF: B = (N × T)·w).
         let c = textures[t as usize].eval(h.uv);
         let local = Vec3A::from(c * 2.0 - 1.0);
-        tangent_frame(h.ns, h.dpdu).to_world(local)
+        let mut f = tangent_frame(h.ns, h.dpdu);
+        f.t *= h.bitangent_sign;
+        f.to_world(local)
     } else if let Some(b) = bump {
         // bumpmap.cpp, frame(): the surface displaced along ns by scale·height has the
         // partials below (the height's own variation replaces their normal component).
@@ -195,7 +217,57 @@ mod tests {
             dpdv: Vec3A::new(0.0, 2.0, 0.0),
             uv: Vec2::new(0.3, 0.7),
             wi,
+            bitangent_sign: 1.0,
         }
+    }
+
+    /// A vertex tangent equal to dp/du (sign +1) gives the frame built from dp/du.
+    #[test]
+    fn tangent_equal_to_dpdu_keeps_the_normal() {
+        let tex = [bitmap(1, 1, vec![Color::new(0.7, 0.35, 0.9)])];
+        let ns = Vec3A::new(0.3, -0.2, 0.9).normalize();
+        let wi = Vec3A::new(0.1, 0.4, 0.8).normalize();
+        let mut h = hit(ns, wi);
+        h.dpdu = Vec3A::new(2.0, 0.3, 0.1);
+        let today = perturbed_normal(Some(0), None, &h, &tex);
+        assert!((today - ns).length() > 0.1, "the texel tilts: {today}");
+        let t = glam::Vec3::from(h.dpdu).extend(1.0);
+        let n = perturbed_normal(Some(0), None, &h.with_tangent(t), &tex);
+        assert!((n - today).length() < 1e-6, "{n} vs {today}");
+        // A tangent along the normal has no direction in the surface: dp/du stays.
+        let n = perturbed_normal(Some(0), None, &h.with_tangent(ns.extend(1.0)), &tex);
+        assert!((n - today).length() < 1e-6, "{n} vs {today}");
+    }
+
+    /// A tangent turned 90° about n turns the tilt with it; w = −1 mirrors the bitangent.
+    #[test]
+    fn rotated_tangent_turns_the_tilt() {
+        let (s, c) = 30f32.to_radians().sin_cos();
+        // Tilted 30° towards +x of the tangent frame...
+        let along_t = [bitmap(
+            1,
+            1,
+            vec![Color::new((1.0 + s) / 2.0, 0.5, (1.0 + c) / 2.0)],
+        )];
+        // ...and towards +y (the bitangent).
+        let along_b = [bitmap(
+            1,
+            1,
+            vec![Color::new(0.5, (1.0 + s) / 2.0, (1.0 + c) / 2.0)],
+        )];
+        let h = hit(Vec3A::Z, Vec3A::Z); // dp/du = (2, 0, 0)
+        let n = perturbed_normal(Some(0), None, &h, &along_t);
+        assert!((n - Vec3A::new(s, 0.0, c)).length() < 1e-5, "{n}");
+        // T = +y: B = z × y = −x.
+        let ty = h.with_tangent(glam::Vec4::new(0.0, 3.0, 0.0, 1.0));
+        let n = perturbed_normal(Some(0), None, &ty, &along_t);
+        assert!((n - Vec3A::new(0.0, s, c)).length() < 1e-5, "{n}");
+        let n = perturbed_normal(Some(0), None, &ty, &along_b);
+        assert!((n - Vec3A::new(-s, 0.0, c)).length() < 1e-5, "{n}");
+        // w = −1: B = −(z × y) = +x.
+        let ty = h.with_tangent(glam::Vec4::new(0.0, 3.0, 0.0, -1.0));
+        let n = perturbed_normal(Some(0), None, &ty, &along_b);
+        assert!((n - Vec3A::new(s, 0.0, c)).length() < 1e-5, "{n}");
     }
 
     #[test]

@@ -27,6 +27,7 @@ impl Scene {
         let mut positions = Vec::new();
         let mut normals = Vec::new();
         let mut uvs = Vec::new();
+        let mut tangents = Vec::new();
         let mut attrs = Vec::new();
         let mut spheres = Vec::new();
         let mut sphere_frames = Vec::new();
@@ -81,6 +82,15 @@ impl Scene {
                                 .map_or(u32::MAX, |ts| {
                                     uvs.extend_from_slice(ts);
                                     (uvs.len() - ts.len()) as u32
+                                }),
+                            // Only a normal map's tangent frame reads them.
+                            tangents: mesh
+                                .tangents
+                                .as_ref()
+                                .filter(|_| mat.is_some_and(|mat| mat.normal_map.is_some()))
+                                .map_or(u32::MAX, |ts| {
+                                    tangents.extend_from_slice(ts);
+                                    (tangents.len() - ts.len()) as u32
                                 }),
                         });
                     }
@@ -293,6 +303,7 @@ impl Scene {
             emitters,
             normals,
             uvs,
+            tangents,
             attrs,
             bvh: wide,
             materials: desc.materials,

@@ -43,6 +43,7 @@ pub fn unit_cylinder() -> TriangleMesh {
         indices.push([b0, t1, t0]);
     }
     TriangleMesh {
+        tangents: None,
         positions,
         normals: Some(normals),
         uvs: Some(uvs),

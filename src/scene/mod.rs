@@ -51,6 +51,9 @@ pub struct MeshAttrs {
     pub normals: u32,
     /// Its first vertex's texture coordinates in `Scene::uvs`, or u32::MAX without.
     pub uvs: u32,
+    /// Its first vertex's tangent in `Scene::tangents`, or u32::MAX (without tangents, or
+    /// without a normal map to read them).
+    pub tangents: u32,
 }
 
 /// A ray's hit on a surface, with everything shading needs.
@@ -145,6 +148,8 @@ pub struct Scene {
     /// sorted by first vertex.
     pub(crate) normals: Vec<glam::Vec3>,
     pub(crate) uvs: Vec<Vec2>,
+    /// Vertex tangents (xyz, bitangent sign w) of normal-mapped meshes that have them.
+    pub(crate) tangents: Vec<Vec4>,
     pub(crate) attrs: Vec<MeshAttrs>,
     pub bvh: WideBvh,
     /// The primitives of a small scene for brute-force tests of single rays, where the CPU
@@ -293,6 +298,7 @@ impl Scene {
             let ng = tri.normal_unnormalized().normalize();
             let (mut ns, mut uv) = (ng, Vec2::new(u, v));
             let mut uv3 = None;
+            let mut tangent = None;
             if meta & META_ATTRS != 0 {
                 let m = self.mesh_attrs(idx[0]);
                 let local = idx.map(|k| (k - m.first_vertex) as usize);
@@ -315,6 +321,11 @@ impl Scene {
                     uv = t0 * (1.0 - u - v) + t1 * u + t2 * v;
                     uv3 = Some([t0, t1, t2]);
                 }
+                if m.tangents != u32::MAX {
+                    let ts = &self.tangents[m.tangents as usize..];
+                    let [t0, t1, t2] = local.map(|k| ts[k]);
+                    tangent = Some(t0 * (1.0 - u - v) + t1 * u + t2 * v);
+                }
             }
             let mut si = Interaction {
                 p,
@@ -328,7 +339,7 @@ impl Scene {
                 light,
             };
             if meta & META_ATTRS != 0 && self.materials[material as usize].perturbs() {
-                self.perturb_triangle(&mut si, ray, &tri, uv3);
+                self.perturb_triangle(&mut si, ray, &tri, uv3, tangent);
             }
             si
         } else {
@@ -519,6 +530,7 @@ impl Scene {
             + size_of_val(&self.emitters[..])
             + size_of_val(&self.normals[..])
             + size_of_val(&self.uvs[..])
+            + size_of_val(&self.tangents[..])
             + size_of_val(&self.attrs[..])
             + self.bvh.memory_bytes()
             + self.flat_bytes()

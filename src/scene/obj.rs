@@ -138,6 +138,7 @@ pub fn parse_obj(path: &Path, text: &str) -> Result<TriangleMesh, SceneError> {
         None
     };
     Ok(TriangleMesh {
+        tangents: None,
         positions: out_pos,
         normals,
         uvs,

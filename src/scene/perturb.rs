@@ -6,12 +6,14 @@
 use super::{Interaction, Scene};
 use crate::geometry::{Ray, Triangle};
 use crate::material::normal_map::{perturbed_normal, HitGeometry};
-use glam::{Vec2, Vec3A};
+use glam::{Vec2, Vec3A, Vec4};
 use std::f32::consts::{PI, TAU};
 
 impl Scene {
     /// Perturbs the shading normal of `si`, a hit of triangle `tri` (vertex texture
-    /// coordinates `uvs`, if its mesh has them) with a normal- or bump-mapped material.
+    /// coordinates `uvs`, if its mesh has them) with a normal- or bump-mapped material;
+    /// `tangent` is the interpolated vertex tangent (glTF's TANGENT), where the mesh has
+    /// them and the material a normal map.
     #[cold]
     pub(super) fn perturb_triangle(
         &self,
@@ -19,9 +21,10 @@ impl Scene {
         ray: &Ray,
         tri: &Triangle,
         uvs: Option<[Vec2; 3]>,
+        tangent: Option<Vec4>,
     ) {
         let (dpdu, dpdv) = triangle_partials(tri, uvs, si.ng);
-        self.perturb(si, ray, dpdu, dpdv);
+        self.perturb(si, ray, dpdu, dpdv, tangent);
     }
 
     /// Perturbs the shading normal of `si`, a hit of a sphere of radius `radius`.
@@ -38,19 +41,30 @@ impl Scene {
         let outward = if frame.flip { -si.ng } else { si.ng };
         let (dpdu, dpdv) = sphere_partials(frame.local(outward), radius);
         let (dpdu, dpdv) = (frame.world(dpdu), frame.world(dpdv));
-        self.perturb(si, ray, dpdu, dpdv);
+        self.perturb(si, ray, dpdu, dpdv, None);
     }
 
-    fn perturb(&self, si: &mut Interaction, ray: &Ray, dpdu: Vec3A, dpdv: Vec3A) {
+    fn perturb(
+        &self,
+        si: &mut Interaction,
+        ray: &Ray,
+        dpdu: Vec3A,
+        dpdv: Vec3A,
+        tangent: Option<Vec4>,
+    ) {
         let m = &self.materials[si.material as usize];
-        let h = HitGeometry {
+        let mut h = HitGeometry {
             ng: si.ng,
             ns: si.ns,
             dpdu,
             dpdv,
             uv: si.uv,
             wi: -ray.d.normalize(),
+            bitangent_sign: 1.0,
         };
+        if let Some(t) = tangent {
+            h = h.with_tangent(t);
+        }
         si.ns = perturbed_normal(m.normal_map, m.bump, &h, &self.textures);
     }
 }

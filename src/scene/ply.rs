@@ -34,6 +34,7 @@ impl PlyMesh {
     /// The mesh as the renderer's [`TriangleMesh`].
     pub fn into_triangle_mesh(self) -> TriangleMesh {
         TriangleMesh {
+            tangents: None,
             normals: if self.normals.is_empty() {
                 None
             } else {

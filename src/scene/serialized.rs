@@ -262,6 +262,7 @@ fn read_mesh<R: Read>(z: &mut Stream<R>, version: u16) -> Result<TriangleMesh, S
         ));
     }
     Ok(TriangleMesh {
+        tangents: None,
         positions,
         normals,
         uvs,

@@ -792,6 +792,7 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                 // A quad's corners get uv (0,0), (1,0), (1,1), (0,1), as Mitsuba's rectangle.
                 let uvs = (n == 4).then(|| vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y]);
                 GeometryDesc::Mesh(TriangleMesh {
+                    tangents: None,
                     positions,
                     normals: None,
                     uvs,
@@ -955,6 +956,7 @@ pub fn parse_toml(path: &Path, text: &str) -> Result<SceneDesc, SceneError> {
                             None => None,
                         };
                         let mut m = TriangleMesh {
+                            tangents: None,
                             positions: pos.get_ref().iter().map(|p| Vec3::from(*p)).collect(),
                             normals,
                             uvs,

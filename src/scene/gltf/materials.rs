@@ -339,7 +339,8 @@ impl Loader<'_> {
     /// The normal texture as Mitsuba's `normalmap` reads one: linear values c, the normal
     /// 2c − 1 in the frame (dp/du, n × dp/du, n), which is glTF's tangent space (+x along
     /// increasing u, +y towards the image's top, i.e. decreasing v) where the tangents follow
-    /// the texture coordinates; glTF's `scale` multiplies x and y.
+    /// the texture coordinates (a primitive's TANGENT replaces dp/du, its w the bitangent's
+    /// sign: [`crate::material::normal_map::HitGeometry::with_tangent`]); glTF's `scale` multiplies x and y.
     fn normal_texture(
         &mut self,
         n: &::gltf::material::NormalTexture,

@@ -1,6 +1,7 @@
 //! Meshes (glTF 2.0 §3.7.2): each primitive becomes a triangle mesh in world space, with its
-//! vertex normals (NORMAL) and texture coordinates (TEXCOORD_0) where it has them; a
-//! primitive without normals is flat-shaded, as the specification asks.
+//! vertex normals (NORMAL), texture coordinates (TEXCOORD_0) and tangents (TANGENT, for a
+//! normal map's tangent frame) where it has them; a primitive without normals is
+//! flat-shaded, as the specification asks.
 //!
 //! A mesh that several nodes use becomes one shape group (its primitives, with their
 //! materials, in the mesh's space; see [`crate::scene::instance`]) and one instance per node,
@@ -16,7 +17,7 @@ use crate::geometry::mesh::TriangleMesh;
 use crate::scene::desc::{GeometryDesc, GroupDesc, InstanceDesc, ShapeDesc, MAX_PRIMITIVES};
 use crate::scene::SceneError;
 use ::gltf::mesh::{Mode, Semantic};
-use glam::{Affine3A, Mat4, Vec2, Vec3};
+use glam::{Affine3A, Mat4, Vec2, Vec3, Vec4};
 
 /// Whether a node with this world matrix may place an instance (see the module's comment).
 fn can_place(world: &Mat4) -> bool {
@@ -225,6 +226,30 @@ fn read_primitive(
         }
         None => None,
     };
+    // glTF 2.0 §3.7.2.1: TANGENT is VEC4 float, xyz a unit tangent, w = ±1 the bitangent's
+    // sign. Only the sign of w is kept (a non-finite or zero tangent is dropped to zero,
+    // where the uv-derived dp/du stands in at a hit).
+    let tangents = match prim.get(&Semantic::Tangents) {
+        Some(a) => {
+            let v: Vec<Vec4> = l
+                .read_floats(&a, "TANGENT", 4)?
+                .chunks_exact(4)
+                .map(|c| {
+                    let t = Vec4::from_slice(c);
+                    let d = t.truncate();
+                    if t.is_finite() && d != Vec3::ZERO {
+                        d.normalize_or_zero()
+                            .extend(if t.w < 0.0 { -1.0 } else { 1.0 })
+                    } else {
+                        Vec4::ZERO
+                    }
+                })
+                .collect();
+            count_check(l, "TANGENT", v.len())?;
+            Some(v)
+        }
+        None => None,
+    };
     let list: Vec<u32> = match prim.indices() {
         Some(a) => {
             let idx = l.read_indices(&a, "indices")?;
@@ -243,6 +268,7 @@ fn read_primitive(
         positions,
         normals,
         uvs,
+        tangents,
         indices: triangles(mode, &list),
     }))
 }

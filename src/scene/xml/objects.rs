@@ -814,6 +814,7 @@ impl<'a> Builder<'a> {
 /// A mesh from local vertices and triangles, moved to the world by `m`.
 fn mesh(v: &[[f32; 3]], idx: &[[u32; 3]], m: Mat4, flip: bool) -> TriangleMesh {
     let mut mesh = TriangleMesh {
+        tangents: None,
         positions: v.iter().map(|p| Vec3::from_array(*p)).collect(),
         normals: None,
         // Planar texture coordinates over [−1, 1]² (Mitsuba's rectangle; the disk and the

@@ -56,6 +56,11 @@ cases["gltf-accessor-out-of-bounds.gltf"] = (d, "reads past the end of bufferVie
 d = base(); d["accessors"][1]["count"] = 3
 cases["gltf-index-out-of-range.gltf"] = (d, "is out of range (the primitive has 2 vertices)")
 d["accessors"][0]["count"] = 2
+d = base(); d["meshes"][0]["primitives"][0]["attributes"]["TANGENT"] = 0
+cases["gltf-tangent-wrong-type.gltf"] = (d, "(TANGENT) has type Vec3; 4 components were expected")
+d = base(); d["meshes"][0]["primitives"][0]["attributes"]["TANGENT"] = 2
+d["accessors"].append({"bufferView": 0, "componentType": 5126, "count": 2, "type": "VEC4"})
+cases["gltf-tangent-count.gltf"] = (d, "TANGENT has 2 elements but POSITION has 3")
 d = base(); d["extensionsRequired"] = ["KHR_draco_mesh_compression"]; d["extensionsUsed"] = ["KHR_draco_mesh_compression"]
 cases["gltf-unsupported-extension.gltf"] = (d, "requires the extension 'KHR_draco_mesh_compression'")
 d = base(); d["scenes"][0]["nodes"] = [0]
