@@ -195,7 +195,10 @@ fn approximations_refused_unless_lenient() {
     let node = r#", {"extensions": {"KHR_lights_punctual": {"light": 0}}}"#;
     let json = triangle(PERSPECTIVE, mat, node, lights);
     let err = parse(&json, false).unwrap_err().to_string();
-    assert!(err.contains("the clearcoat layer is ignored"), "{err}");
+    assert!(
+        err.contains("the clearcoat layer is rendered as principled"),
+        "{err}"
+    );
     assert!(
         err.contains("(and 1 more)") && err.contains("--lenient"),
         "{err}"
@@ -208,6 +211,12 @@ fn approximations_refused_unless_lenient() {
         .collect();
     assert_eq!(approx.len(), 2, "{:?}", desc.warnings);
     assert!(approx.iter().any(|w| w.contains("sheen")));
+    // The layers are principled's clearcoat and sheen (Blender's importer maps them so).
+    let coated = desc.materials.iter().any(|m| {
+        matches!(m.bsdf, mcrt::material::Bsdf::Principled(p)
+            if p.clearcoat == 1.0 && p.clearcoat_gloss == 1.0 && p.sheen == 1.0)
+    });
+    assert!(coated, "{:?}", desc.materials);
     // The spot light is Mitsuba's spot; its edge's falloff is a note in both modes.
     assert!(desc.warnings.iter().any(|w| w.contains("fades linearly")));
     assert!(matches!(

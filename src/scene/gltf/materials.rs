@@ -25,6 +25,11 @@ pub struct Pbr {
     pub transmission: f32,
     /// KHR_materials_specular: the dielectric's specular strength and colour.
     pub specular: Color,
+    /// KHR_materials_clearcoat: the coat's weight and roughness.
+    pub clearcoat: f32,
+    pub clearcoat_roughness: f32,
+    /// KHR_materials_sheen: the largest component of sheenColorFactor.
+    pub sheen: f32,
 }
 
 impl Default for Pbr {
@@ -37,6 +42,9 @@ impl Default for Pbr {
             ior: 1.5,
             transmission: 0.0,
             specular: Color::ONE,
+            clearcoat: 0.0,
+            clearcoat_roughness: 0.0,
+            sheen: 0.0,
         }
     }
 }
@@ -44,12 +52,19 @@ impl Default for Pbr {
 /// The mcrt BSDF that renders a glTF material: Mitsuba's `principled` (the Disney BSDF),
 /// whose base colour, metallic, roughness, `spec_trans` and η are glTF's base colour,
 /// metallic, roughness, transmission and ior (docs/gltf.md compares it with Appendix B).
+/// KHR_materials_clearcoat and _sheen go onto principled's clearcoat (weight, gloss = 1 −
+/// roughness) and sheen (weight; untinted), as Blender's glTF importer maps them onto its
+/// Principled BSDF: approximations, since those lobes are not glTF's (GTR1 at a quarter
+/// strength, Burley's sheen instead of the Charlie distribution).
 pub fn bsdf_for(p: &Pbr) -> Bsdf {
     Bsdf::Principled(Principled {
         base_color: p.base,
         roughness: p.roughness,
         metallic: p.metallic,
         spec_trans: p.transmission,
+        clearcoat: p.clearcoat,
+        clearcoat_gloss: 1.0 - p.clearcoat_roughness,
+        sheen: p.sheen,
         eta: Principled::eta_of(Some(p.ior), None, p.transmission != 0.0),
         ..Principled::default()
     })
@@ -137,6 +152,10 @@ impl Loader<'_> {
                 self.approximate(format!("{what}: the specular textures are ignored"));
             }
         }
+        let ext = |name: &str, key: &str| extension_factor(m, name, key);
+        p.clearcoat = ext("KHR_materials_clearcoat", "clearcoatFactor");
+        p.clearcoat_roughness = ext("KHR_materials_clearcoat", "clearcoatRoughnessFactor");
+        p.sheen = ext("KHR_materials_sheen", "sheenColorFactor");
         // Factors are checked before they scale textures.
         self.check_pbr(&p, what)?;
         let mut slots = Vec::new();
@@ -193,6 +212,15 @@ impl Loader<'_> {
             Some(format!("transmissionFactor {}", p.transmission))
         } else if !(p.ior >= 1.0 && p.ior.is_finite()) {
             Some(format!("ior {} (must be at least 1)", p.ior))
+        } else if !unit(p.clearcoat) {
+            Some(format!("clearcoatFactor {}", p.clearcoat))
+        } else if !unit(p.clearcoat_roughness) {
+            Some(format!(
+                "clearcoatRoughnessFactor {}",
+                p.clearcoat_roughness
+            ))
+        } else if !unit(p.sheen) {
+            Some(format!("sheenColorFactor {}", p.sheen))
         } else if !(p.specular.is_finite() && p.specular.min_element() >= 0.0) {
             Some(format!("specular {:?}", p.specular.to_array()))
         } else {
@@ -222,27 +250,36 @@ impl Loader<'_> {
                 m.alpha_mode()
             ));
         }
-        let factor = |ext: &str, key: &str| -> f32 {
-            m.extension_value(ext)
-                .and_then(|v| v.get(key))
-                .map(|v| match v {
-                    ::gltf::json::Value::Number(n) => n.as_f64().unwrap_or(0.0) as f32,
-                    ::gltf::json::Value::Array(a) => a
-                        .iter()
-                        .filter_map(|x| x.as_f64())
-                        .fold(0.0f32, |s, x| s.max(x as f32)),
-                    _ => 0.0,
-                })
-                .unwrap_or(0.0)
-        };
-        if factor("KHR_materials_clearcoat", "clearcoatFactor") > 0.0 {
-            self.approximate(format!("{what}: the clearcoat layer is ignored"));
+        if p.clearcoat > 0.0 {
+            self.approximate(format!(
+                "{what}: the clearcoat layer is rendered as principled's clearcoat (GTR1)"
+            ));
         }
-        if factor("KHR_materials_sheen", "sheenColorFactor") > 0.0 {
-            self.approximate(format!("{what}: the sheen layer is ignored"));
+        if p.sheen > 0.0 {
+            self.approximate(format!(
+                "{what}: the sheen layer is rendered as principled's untinted sheen"
+            ));
         }
     }
+}
 
+/// A material extension's number, or the largest entry of its array (a colour); 0 where
+/// absent or not a number (the extensions' defaults for the factors read here).
+fn extension_factor(m: &::gltf::Material, ext: &str, key: &str) -> f32 {
+    m.extension_value(ext)
+        .and_then(|v| v.get(key))
+        .map(|v| match v {
+            ::gltf::json::Value::Number(n) => n.as_f64().unwrap_or(0.0) as f32,
+            ::gltf::json::Value::Array(a) => a
+                .iter()
+                .filter_map(|x| x.as_f64())
+                .fold(0.0f32, |s, x| s.max(x as f32)),
+            _ => 0.0,
+        })
+        .unwrap_or(0.0)
+}
+
+impl Loader<'_> {
     /// Emitted radiance: emissiveFactor × KHR_materials_emissive_strength, times the
     /// emissive texture (sRGB) where there is one; None for black.
     fn emission(
@@ -494,6 +531,9 @@ mod tests {
             ior: 1.4,
             transmission: 0.7,
             specular: Color::ONE,
+            clearcoat: 0.5,
+            clearcoat_roughness: 0.2,
+            sheen: 0.4,
         };
         let Bsdf::Principled(b) = bsdf_for(&p) else {
             panic!("not principled")
@@ -503,6 +543,7 @@ mod tests {
             (b.metallic, b.roughness, b.spec_trans, b.eta),
             (0.3, 0.6, 0.7, 1.4)
         );
-        assert_eq!((b.clearcoat, b.sheen, b.anisotropic), (0.0, 0.0, 0.0));
+        assert_eq!((b.clearcoat, b.clearcoat_gloss), (0.5, 0.8));
+        assert_eq!((b.sheen, b.sheen_tint, b.anisotropic), (0.4, 0.0, 0.0));
     }
 }
