@@ -397,22 +397,6 @@ fn chi2_rejects_wrong_microfacet_pdfs() {
 // Energy
 // ---------------------------------------------------------------------------------------------
 
-/// Directional albedo ∫ f |cos θi| dωi two ways: by uniform sphere sampling of `eval`
-/// (independent of the sampler) and by the mean sample weight; returns both (mean, stderr).
-fn albedos(m: &Material, wo: Vec3A, mode: TransportMode, n: usize, seed: u64) -> [(f64, f64); 2] {
-    let mut rng = Rng::new(seed);
-    let uniform = mean_and_stderr((0..n).map(|_| {
-        let wi = rng.sphere();
-        4.0 * PI * m.eval_mode(wo, wi, mode).x as f64 * wi.z.abs() as f64
-    }));
-    let sampled = mean_and_stderr((0..n).map(|_| {
-        let u1 = rng.f();
-        m.sample(wo, u1, rng.u2(), mode)
-            .map_or(0.0, |s| s.weight.x as f64)
-    }));
-    [uniform, sampled]
-}
-
 /// ∫ f cos ≤ 1 for the rough BSDFs (GGX loses energy to single-scattering masking, never
 /// gains), the two estimates agree, and a perfect rough mirror ("none", F = 1) at low
 /// roughness reflects nearly everything. The rough dielectric is checked in importance mode

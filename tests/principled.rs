@@ -16,7 +16,6 @@ use mcrt::material::{
 };
 use mcrt::Color;
 use stats::*;
-use std::f64::consts::PI;
 
 /// Monte Carlo comparisons allow Z standard errors (P(|Z| > 5) ≈ 6e-7 each).
 const Z: f64 = 5.0;
@@ -384,22 +383,6 @@ fn white_transmission_is_a_rough_dielectric() {
 // ---------------------------------------------------------------------------------------------
 // Energy
 // ---------------------------------------------------------------------------------------------
-
-/// Directional albedo ∫ f |cos θi| dωi (first channel) two ways: uniform sphere sampling of
-/// `eval` (independent of the sampler) and the mean sample weight; (mean, stderr) of each.
-fn albedos(m: &Material, wo: Vec3A, mode: TransportMode, n: usize, seed: u64) -> [(f64, f64); 2] {
-    let mut rng = Rng::new(seed);
-    let uniform = mean_and_stderr((0..n).map(|_| {
-        let wi = rng.sphere();
-        4.0 * PI * m.eval_mode(wo, wi, mode).x as f64 * wi.z.abs() as f64
-    }));
-    let sampled = mean_and_stderr((0..n).map(|_| {
-        let u1 = rng.f();
-        m.sample(wo, u1, rng.u2(), mode)
-            .map_or(0.0, |s| s.weight.x as f64)
-    }));
-    [uniform, sampled]
-}
 
 /// The albedo of `m` at `wo`: both estimates agree and equal `expected` (when given) within Z
 /// standard errors (plus f32 rounding, or 1 % where the lobe is `peaked`: GGX's masking at

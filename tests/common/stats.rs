@@ -267,3 +267,25 @@ pub fn chi2_material(m: &Material, wo: Vec3A, seed: u64) -> (f64, usize, f64) {
         seed,
     )
 }
+
+/// Directional albedo ∫ f |cos θi| dωi (first channel) two ways: uniform sphere sampling of
+/// `eval` (independent of the sampler) and the mean sample weight; (mean, stderr) of each.
+pub fn albedos(
+    m: &Material,
+    wo: Vec3A,
+    mode: TransportMode,
+    n: usize,
+    seed: u64,
+) -> [(f64, f64); 2] {
+    let mut rng = Rng::new(seed);
+    let uniform = mean_and_stderr((0..n).map(|_| {
+        let wi = rng.sphere();
+        4.0 * PI * m.eval_mode(wo, wi, mode).x as f64 * wi.z.abs() as f64
+    }));
+    let sampled = mean_and_stderr((0..n).map(|_| {
+        let u1 = rng.f();
+        m.sample(wo, u1, rng.u2(), mode)
+            .map_or(0.0, |s| s.weight.x as f64)
+    }));
+    [uniform, sampled]
+}
