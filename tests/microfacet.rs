@@ -202,17 +202,7 @@ const FINER: usize = 128;
 fn chi2_cases(cases: &[(Material, Vec3A)], seed: u64, fine: usize) {
     let mut failures = Vec::new();
     for (k, (m, wo)) in cases.iter().enumerate() {
-        let (stat, dof, p) = chi2_test_k(
-            |rng| {
-                let u1 = rng.f();
-                m.sample(*wo, u1, rng.u2(), TransportMode::Radiance)
-                    .filter(|s| !s.specular)
-                    .map(|s| s.wi)
-            },
-            &|wi| m.pdf(*wo, wi) as f64,
-            seed + k as u64,
-            fine,
-        );
+        let (stat, dof, p) = material_chi2(m, m, *wo, seed + k as u64, fine);
         eprintln!(
             "{:?} wo {:?}: χ² = {stat:.1}, dof {dof}, p = {p:.3}",
             m.bsdf, *wo

@@ -106,20 +106,9 @@ const ALPHA: f64 = 0.01 / CHI2_TESTS;
 /// Simpson subdivisions per histogram cell for the expected counts of peaked lobes.
 const FINE: usize = 32;
 
-/// Samples `sampler` at `wo` and tests against `pdf_of`'s pdf (the same material unless a
-/// test wants a wrong one); returns the p-value.
+/// [`material_chi2`] at this file's subdivision.
 fn chi2(sampler: &Material, pdf_of: &Material, wo: Vec3A, seed: u64) -> (f64, usize, f64) {
-    chi2_test_k(
-        |rng| {
-            let u1 = rng.f();
-            sampler
-                .sample(wo, u1, rng.u2(), TransportMode::Radiance)
-                .map(|s| s.wi)
-        },
-        &|wi| pdf_of.pdf(wo, wi) as f64,
-        seed,
-        FINE,
-    )
+    material_chi2(sampler, pdf_of, wo, seed, FINE)
 }
 
 fn chi2_cases(cases: &[(&str, Material, Vec3A)], seed: u64) {

@@ -289,3 +289,27 @@ pub fn albedos(
     }));
     [uniform, sampled]
 }
+
+/// The chi-square test of a material's direction sampling: `sampler`'s non-delta samples at
+/// `wo` against `pdf_of`'s pdf (the same material unless a test wants a wrong one), with
+/// `k_sub` Simpson subdivisions per cell; (statistic, degrees of freedom, p-value).
+pub fn material_chi2(
+    sampler: &Material,
+    pdf_of: &Material,
+    wo: Vec3A,
+    seed: u64,
+    k_sub: usize,
+) -> (f64, usize, f64) {
+    chi2_test_k(
+        |rng| {
+            let u1 = rng.f();
+            sampler
+                .sample(wo, u1, rng.u2(), TransportMode::Radiance)
+                .filter(|s| !s.specular)
+                .map(|s| s.wi)
+        },
+        &|wi| pdf_of.pdf(wo, wi) as f64,
+        seed,
+        k_sub,
+    )
+}
