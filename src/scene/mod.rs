@@ -233,6 +233,16 @@ impl Scene {
         Some(self.interaction(ray, i, u, v, t))
     }
 
+    /// Closest hits of several rays: `out[k]` is [`Scene::intersect`]`(&rays[k])`, the same
+    /// bits, for the stream path tracer, which traces a batch of independent rays at once so
+    /// that their memory loads can overlap. Panics if the slices' lengths differ.
+    pub fn intersect_many(&self, rays: &[Ray], out: &mut [Option<Interaction>]) {
+        assert_eq!(rays.len(), out.len());
+        for (ray, o) in rays.iter().zip(out) {
+            *o = self.intersect(ray);
+        }
+    }
+
     /// The closest of this scene's own primitives (not its instances) hit before `t_max`
     /// (or at it), and seen (through masks): (primitive, u, v, t).
     #[inline(always)]
