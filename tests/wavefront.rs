@@ -670,18 +670,25 @@ vertices = [[2, 0.1, 0], [2, 0.1, 1], [2, 1, 0]]
             "[texture.checks]\ntype = \"checkerboard\"\ncolor0 = [0.1, 0.1, 0.1]\ncolor1 = [0.9, 0.9, 0.9]\n[material.board]\ntype = \"lambert\"\nalbedo = \"checks\"",
         ),
     );
-    declined(
-        "vertex normals",
-        &(OPEN.to_string()
+    let mesh = |normals: &str| {
+        OPEN.to_string()
             + r#"
 [[shape]]
 type = "mesh"
 material = "floor"
 positions = [[-1, 0.1, 0], [1, 0.1, 0], [0, 0.1, 1]]
 indices = [[0, 1, 2]]
-normals = [[0, 1, 0], [0, 1, 0], [0, 1, 0]]
-"#),
+"# + normals
+    };
+    declined(
+        "vertex normals",
+        &mesh("normals = [[0, 1, 0], [0.1, 1, 0], [0, 1, 0]]\n"),
     );
+    // Vertex normals that are the face's own (on either side) are dropped when the scene is
+    // built, so such a mesh is flat and taken.
+    let scene = scene_from(&mesh("normals = [[0, 1, 0], [0, 1, 0], [0, 1, 0]]\n"));
+    let s = settings(&scene, FileSettings::default());
+    assert!(Wavefront::new(&scene, &s).is_some(), "face normals");
     // Over 64 primitives.
     let many: String = (0..40)
         .map(|i| {

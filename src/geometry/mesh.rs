@@ -20,6 +20,12 @@ pub struct TriangleMesh {
 /// and so an emitter's power, is exact).
 pub const DISK_SEGMENTS: u32 = 256;
 
+/// How far (per component, between unit vectors) a vertex normal may lie from its face's
+/// normal and still count as that normal ([`TriangleMesh::drop_flat_normals`]): normals
+/// written with six decimals are within 5e-7, and a deliberately smooth mesh would need faces
+/// under 1e-5 radians wide (billions of triangles on a sphere) to pass for flat.
+pub const FLAT_NORMAL_TOLERANCE: f32 = 1e-5;
+
 impl TriangleMesh {
     /// Mitsuba's `disk`: the unit disk in the xy plane, facing +z, as a regular polygon of
     /// [`DISK_SEGMENTS`] sides and the same area (π), a fan around the centre, with planar
@@ -83,6 +89,38 @@ impl TriangleMesh {
         self.normals = Some(ns);
     }
 
+    /// Drops the vertex normals where they are the faces' own: each triangle's three within
+    /// [`FLAT_NORMAL_TOLERANCE`] of its unit geometric normal (on either side). Interpolated,
+    /// such normals give that normal again up to rounding, so the shading stays the same,
+    /// while a hit no longer looks up and interpolates three normals, and the mesh counts as
+    /// flat wherever a renderer path takes only meshes without normals. Flat-shaded meshes
+    /// are common: Blender exports a flat-shaded object's split vertices with its face
+    /// normals, and Mitsuba's (and so mcrt's) OBJ loader computes vertex normals for a file
+    /// without them, which for a mesh that shares no vertices are the faces' normals.
+    /// Returns whether it dropped them.
+    pub fn drop_flat_normals(&mut self) -> bool {
+        use rayon::prelude::*;
+        let Some(ns) = &self.normals else {
+            return false;
+        };
+        let pos = &self.positions;
+        let flat = self.indices.par_iter().with_min_len(1 << 12).all(|t| {
+            let [a, b, c] = t.map(|i| pos[i as usize]);
+            let ng = (b - a).cross(c - a).normalize_or_zero();
+            // A degenerate triangle is never hit (the scene drops it).
+            ng == Vec3::ZERO
+                || t.iter().all(|&i| {
+                    let n = ns[i as usize].normalize_or_zero();
+                    let d = if n.dot(ng) < 0.0 { n + ng } else { n - ng };
+                    d.abs().max_element() <= FLAT_NORMAL_TOLERANCE
+                })
+        });
+        if flat {
+            self.normals = None;
+        }
+        flat
+    }
+
     pub fn triangle_count(&self) -> usize {
         self.indices.len()
     }
@@ -116,5 +154,65 @@ impl TriangleMesh {
                 t.swap(1, 2);
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two triangles of a bent quad, sharing no vertex: z = 0 and x = 1 planes.
+    fn bent() -> TriangleMesh {
+        let p = |x, y, z| Vec3::new(x, y, z);
+        TriangleMesh {
+            positions: vec![
+                p(0., 0., 0.),
+                p(1., 0., 0.),
+                p(0., 1., 0.),
+                p(1., 0., 0.),
+                p(1., 0., 1.),
+                p(1., 1., 0.),
+            ],
+            indices: vec![[0, 1, 2], [3, 4, 5]],
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn face_normals_are_dropped_on_either_side() {
+        let mut m = bent();
+        m.recompute_vertex_normals();
+        assert!(m.drop_flat_normals());
+        assert!(m.normals.is_none());
+        let mut m = bent();
+        // The second face's normals point the other way, and are written to six decimals
+        // of a slightly unnormalised vector.
+        let n = Vec3::new(0.0, 0.0, 1.0);
+        let w = Vec3::new(1.000001, 0.0, 0.0);
+        m.normals = Some(vec![n, n, n, w, w, w]);
+        assert!(m.drop_flat_normals());
+    }
+
+    #[test]
+    fn normals_other_than_the_faces_are_kept() {
+        let mut m = bent();
+        let n = Vec3::new(0.0, 0.0, 1.0);
+        let w = Vec3::new(-1.0, 0.0, 0.0);
+        // One normal tilted by 1e-4: a smooth mesh, however slightly.
+        let tilted = Vec3::new(1e-4, 0.0, 1.0).normalize();
+        m.normals = Some(vec![n, n, tilted, w, w, w]);
+        assert!(!m.drop_flat_normals());
+        assert!(m.normals.is_some());
+        // Shared vertices between the two faces: their computed normals are averages.
+        let mut shared = bent();
+        shared.indices = vec![[0, 1, 2], [1, 4, 5]];
+        shared.recompute_vertex_normals();
+        assert!(!shared.drop_flat_normals());
+        // A zero normal is not its face's.
+        let mut m = bent();
+        m.normals = Some(vec![n, n, Vec3::ZERO, w, w, w]);
+        assert!(!m.drop_flat_normals());
+        let mut none = bent();
+        assert!(!none.drop_flat_normals());
     }
 }

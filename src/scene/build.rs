@@ -52,7 +52,8 @@ impl Scene {
             // (centre, radius, frame) of a sphere, pushed after the match.
             let mut sphere = None;
             match shape.geometry {
-                GeometryDesc::Mesh(mesh) => {
+                GeometryDesc::Mesh(mut mesh) => {
+                    mesh.drop_flat_normals();
                     let base = positions.len() as u32;
                     assert!(
                         positions.len() + mesh.positions.len() < SPHERE as usize,

@@ -27,7 +27,9 @@
 //!
 //! The scenes it takes ([`Wavefront::new`]): those the path tracer traces by brute force
 //! (`accel::flat`: at most 64 triangles and 4 spheres); every material Lambertian (one- or
-//! two-sided, untextured), a mirror (untextured), smooth glass or black; no vertex normals;
+//! two-sided, untextured), a mirror (untextured), smooth glass or black; no vertex normals
+//! (those equal to their faces' normals are dropped when the scene is built:
+//! [`crate::geometry::TriangleMesh::drop_flat_normals`]);
 //! one light, a triangle or a parallelogram; the `path` integrator, any number of shadow
 //! rays (one only with AVX2), either sampler. The Cornell box and the TNCG15 room are such
 //! scenes. Any other scene, and any CPU without AVX2, BMI1, BMI2 and POPCNT, renders with
