@@ -1,0 +1,204 @@
+//! `Scene::intersect` one ray at a time against `Scene::intersect_many` with K rays in flight,
+//! on the rays a path tracer traces: the camera rays of a 64×64 image at 4 samples a pixel,
+//! then three bounces, each ray leaving its hit in a cosine-distributed direction about the
+//! shading normal (on the side it came from), in batches of the size the stream path tracer
+//! hands over.
+//!
+//! cargo bench --bench intersect_many -- [SCENE.xml ...] [--batch N] [--rounds N]
+//!
+//! Defaults: bench/out/scenes/gallery.xml and bench/out/scenes/bunny-box.xml (written by
+//! `python3 bench/make_scenes.py`), batches of 256, 7 rounds. The variants run alternately,
+//! each round in a new order, and each figure is the minimum over the rounds (the machine is
+//! shared), with the spread (max/min) beside it. Every batch's answers are checked equal to
+//! the one-at-a-time ones, bit for bit, before anything is timed. `--only VARIANT` traces
+//! with that variant only, once (`valgrind --tool=callgrind --toggle-collect='*time*'`).
+
+use glam::Vec2;
+use mcrt::geometry::Ray;
+use mcrt::scene::{Interaction, Scene};
+use std::path::Path;
+use std::time::Instant;
+
+const RES: u32 = 64;
+const SPP: u32 = 4;
+const BOUNCES: usize = 3;
+
+/// A 64-bit hash (SplitMix64's finaliser) as a number in [0, 1).
+fn unit(seed: u64) -> f32 {
+    let mut z = seed.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+}
+
+/// The rays of each depth: the camera's, then each bounce's.
+fn path_rays(scene: &Scene) -> Vec<Vec<Ray>> {
+    let cam = scene.camera(None).expect("a camera").build(RES, RES);
+    let mut levels = vec![Vec::new()];
+    for y in 0..RES {
+        for x in 0..RES {
+            for s in 0..SPP {
+                let id = (((y * RES + x) * SPP + s) as u64) << 8;
+                levels[0].push(cam.generate_ray(x, y, Vec2::new(unit(id), unit(id + 1))));
+            }
+        }
+    }
+    for depth in 0..BOUNCES {
+        let mut next = Vec::new();
+        for (k, ray) in levels[depth].iter().enumerate() {
+            let Some(si) = scene.intersect(ray) else {
+                continue;
+            };
+            let id = ((k as u64) << 8) + 2 + 2 * depth as u64;
+            let (u1, u2) = (unit(id), unit(id + 1));
+            let n = if si.ns.dot(ray.d) > 0.0 {
+                -si.ns
+            } else {
+                si.ns
+            };
+            let (a, b) = n.any_orthonormal_pair();
+            let (r, phi) = (u1.sqrt(), std::f32::consts::TAU * u2);
+            let d = a * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt();
+            next.push(si.spawn_ray(d));
+        }
+        levels.push(next);
+    }
+    levels
+}
+
+/// All fields of an answer, as bits.
+fn bits(h: &Option<Interaction>) -> Option<Vec<u32>> {
+    h.as_ref().map(|s| {
+        let mut b = Vec::new();
+        for v in [s.p, s.p_err, s.ng, s.ns, s.ns_base] {
+            b.extend(v.to_array().map(f32::to_bits));
+        }
+        b.extend([
+            s.t.to_bits(),
+            s.uv.x.to_bits(),
+            s.uv.y.to_bits(),
+            s.material,
+            s.light,
+        ]);
+        b
+    })
+}
+
+type Trace = fn(&Scene, &[Ray], &mut [Option<Interaction>]);
+
+fn one_by_one(s: &Scene, rays: &[Ray], out: &mut [Option<Interaction>]) {
+    for (r, o) in rays.iter().zip(out) {
+        *o = s.intersect(r);
+    }
+}
+
+const VARIANTS: [(&str, Trace); 5] = [
+    ("1", one_by_one),
+    ("4", |s, r, o| s.intersect_many_k::<4>(r, o)),
+    ("8", |s, r, o| s.intersect_many_k::<8>(r, o)),
+    ("16", |s, r, o| s.intersect_many_k::<16>(r, o)),
+    ("32", |s, r, o| s.intersect_many_k::<32>(r, o)),
+];
+
+/// Seconds to trace `rays` in batches of `batch` with `f`.
+fn time(
+    scene: &Scene,
+    rays: &[Ray],
+    batch: usize,
+    f: Trace,
+    out: &mut [Option<Interaction>],
+) -> f64 {
+    let t = Instant::now();
+    for (r, o) in rays.chunks(batch).zip(out.chunks_mut(batch)) {
+        f(scene, r, o);
+    }
+    std::hint::black_box(&out);
+    t.elapsed().as_secs_f64()
+}
+
+fn main() {
+    let mut scenes = Vec::new();
+    let (mut batch, mut rounds) = (256usize, 7usize);
+    // `--only NAME`: that variant once, no checks (for `valgrind --tool=callgrind`).
+    let mut only = None;
+    let mut args = std::env::args().skip(1);
+    while let Some(a) = args.next() {
+        match a.as_str() {
+            "--batch" => batch = args.next().and_then(|v| v.parse().ok()).expect("--batch N"),
+            "--rounds" => {
+                rounds = args
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .expect("--rounds N")
+            }
+            "--only" => only = Some(args.next().expect("--only VARIANT")),
+            "--bench" => {}
+            _ => scenes.push(a),
+        }
+    }
+    if scenes.is_empty() {
+        scenes = ["gallery", "bunny-box"]
+            .map(|s| format!("{}/bench/out/scenes/{s}.xml", env!("CARGO_MANIFEST_DIR")))
+            .to_vec();
+    }
+    for path in &scenes {
+        let opts = mcrt::LoadOptions::default();
+        let desc = mcrt::load_scene_with(Path::new(path), &opts)
+            .unwrap_or_else(|e| panic!("{path}: {e} (run python3 bench/make_scenes.py)"));
+        let scene = Scene::build(desc);
+        let levels = path_rays(&scene);
+        let sets = [
+            ("camera", levels[0].clone()),
+            ("bounces", levels[1..].concat()),
+        ];
+        println!(
+            "{path}: {} triangles, batches of {batch}, {rounds} rounds",
+            scene.triangle_count()
+        );
+        for (name, rays) in &sets {
+            if let Some(v) = &only {
+                let f = VARIANTS
+                    .iter()
+                    .find(|(n, _)| n == v)
+                    .expect("a variant's name")
+                    .1;
+                let mut out = vec![None; rays.len()];
+                let t = time(&scene, rays, batch, f, &mut out);
+                println!(
+                    "  {name}: {} rays, {v}: {:.1} ns/ray",
+                    rays.len(),
+                    t * 1e9 / rays.len() as f64
+                );
+                continue;
+            }
+            let mut want = vec![None; rays.len()];
+            one_by_one(&scene, rays, &mut want);
+            let want: Vec<_> = want.iter().map(bits).collect();
+            let mut out = vec![None; rays.len()];
+            for (vname, f) in &VARIANTS[1..] {
+                time(&scene, rays, batch, *f, &mut out);
+                let got: Vec<_> = out.iter().map(bits).collect();
+                assert!(got == want, "{vname}: answers differ from one by one");
+            }
+            let mut best = vec![f64::INFINITY; VARIANTS.len()];
+            let mut worst = vec![0f64; VARIANTS.len()];
+            for round in 0..rounds {
+                for j in 0..VARIANTS.len() {
+                    let v = (j + round) % VARIANTS.len();
+                    let t = time(&scene, rays, batch, VARIANTS[v].1, &mut out);
+                    best[v] = best[v].min(t);
+                    worst[v] = worst[v].max(t);
+                }
+            }
+            println!("  {name}: {} rays", rays.len());
+            for (v, (vname, _)) in VARIANTS.iter().enumerate() {
+                println!(
+                    "    {vname:>10}: {:7.1} ns/ray (spread {:.2}), one by one / this {:.3}",
+                    best[v] * 1e9 / rays.len() as f64,
+                    worst[v] / best[v],
+                    best[0] / best[v],
+                );
+            }
+        }
+    }
+}

@@ -1,0 +1,88 @@
+//! Closest hits of a batch of independent rays ([`Scene::intersect_many`]), their BVH
+//! traversals interleaved so that their cache misses overlap
+//! ([`crate::accel::WideBvh::intersect_stream`]).
+//!
+//! Every answer is the same bits as [`Scene::intersect`]'s: each ray's traversal repeats the
+//! same step function with the same primitive test (`Scene::keep_nearer`, the tie rule
+//! included), and its hit becomes an [`Interaction`] by the same code. Scenes small enough for
+//! brute force ([`crate::accel::flat`]) trace their rays one by one: their few primitives sit
+//! in the L1 cache, with no miss to hide. With instances, the scene's own primitives are
+//! traversed together and the instances (the top-level tree and the groups' trees) one ray at
+//! a time.
+
+use super::{Interaction, Scene, NO_HIT};
+use crate::accel::prefetch;
+use crate::geometry::Ray;
+
+/// Rays in flight in [`Scene::intersect_many`] (see docs/performance.md for the
+/// measurement that chose it).
+pub const STREAM: usize = 16;
+
+impl Scene {
+    /// [`Scene::intersect_many`] with `K` rays in flight (`K` ≤ 1: one by one), for the
+    /// tests and benchmarks, which compare the choices.
+    #[doc(hidden)]
+    pub fn intersect_many_k<const K: usize>(&self, rays: &[Ray], out: &mut [Option<Interaction>]) {
+        assert_eq!(rays.len(), out.len(), "one output per ray");
+        if K <= 1 || self.is_flat() {
+            for (ray, o) in rays.iter().zip(out.iter_mut()) {
+                *o = self.intersect(ray);
+            }
+            return;
+        }
+        let done = |k: usize, found: bool, best: &(usize, f32, f32, f32)| {
+            let ray = &rays[k];
+            let hit = found.then_some(*best);
+            out[k] = match &self.instances {
+                Some(inst) => inst.intersect(self, ray, hit),
+                None => hit.map(|(i, u, v, t)| self.interaction(ray, i, u, v, t)),
+            };
+        };
+        if self.masked {
+            self.closest_stream::<K>(rays, |ray, i, u, v, t| self.seen(ray, i, u, v, t), done);
+        } else {
+            self.closest_stream::<K>(rays, |_, _, _, _, _| true, done);
+        }
+    }
+
+    /// `Scene::closest_kept` of each ray up to infinity, `K` in flight; `done(k, found,
+    /// best)` gets each ray's answer as its traversal ends.
+    #[inline(always)]
+    fn closest_stream<const K: usize>(
+        &self,
+        rays: &[Ray],
+        keep: impl Fn(&Ray, usize, f32, f32, f32) -> bool,
+        done: impl FnMut(usize, bool, &(usize, f32, f32, f32)),
+    ) {
+        self.bvh.intersect_stream::<K, _>(
+            rays,
+            f32::INFINITY,
+            NO_HIT,
+            #[inline(always)]
+            |k, best, i, t_max| {
+                let ray = &rays[k];
+                self.keep_nearer(ray, best, i, t_max, &|i, u, v, t| keep(ray, i, u, v, t))
+            },
+            #[inline(always)]
+            |first, count| self.prefetch_prims(first, count),
+            done,
+        );
+    }
+
+    /// Prefetches the vertex indices of primitives `first..first + count` (BVH order), what
+    /// a leaf's tests read first.
+    #[inline(always)]
+    fn prefetch_prims(&self, first: usize, count: usize) {
+        let prims = &self.tris[first..first + count];
+        let p = prims.as_ptr() as *const u8;
+        let len = std::mem::size_of_val(prims);
+        let mut off = 0;
+        while off < len {
+            // SAFETY: `off` < `len`: inside the slice.
+            prefetch(unsafe { &*p.add(off) });
+            off += 64;
+        }
+        // SAFETY: a leaf holds at least one primitive, so `len` > 0.
+        prefetch(unsafe { &*p.add(len - 1) });
+    }
+}
