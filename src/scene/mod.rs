@@ -239,10 +239,14 @@ impl Scene {
 
     /// Closest hits of several rays: `out[k]` is [`Scene::intersect`]`(&rays[k])`, the same
     /// bits, for the stream path tracer, which traces a batch of independent rays at once so
-    /// that their memory loads can overlap (see [`stream`]). Panics if the slices' lengths
-    /// differ.
+    /// that their memory loads can overlap (see [`stream`]; one by one where the scene fits
+    /// in the cache, [`Scene::streams`]). Panics if the slices' lengths differ.
     pub fn intersect_many(&self, rays: &[Ray], out: &mut [Option<Interaction>]) {
-        self.intersect_many_k::<{ stream::STREAM }>(rays, out);
+        if self.streams() {
+            self.intersect_many_k::<{ stream::STREAM }>(rays, out);
+        } else {
+            self.intersect_many_k::<1>(rays, out);
+        }
     }
 
     /// The closest of this scene's own primitives (not its instances) hit before `t_max`

@@ -18,7 +18,38 @@ use crate::geometry::Ray;
 /// measurement that chose it).
 pub const STREAM: usize = 16;
 
+/// Bytes of the CPU's level-2 cache (of the first CPU, as Linux reports it), 1 MiB where it
+/// is not known.
+fn l2_bytes() -> usize {
+    static L2: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
+    *L2.get_or_init(|| {
+        let dir = std::path::Path::new("/sys/devices/system/cpu/cpu0/cache");
+        let read = |i: usize, f: &str| std::fs::read_to_string(dir.join(format!("index{i}/{f}")));
+        (0..8)
+            .filter(|&i| read(i, "level").is_ok_and(|l| l.trim() == "2"))
+            .find_map(|i| {
+                let size = read(i, "size").ok()?;
+                let kib: usize = size.trim().strip_suffix('K')?.parse().ok()?;
+                Some(kib << 10)
+            })
+            .unwrap_or(1 << 20)
+    })
+}
+
 impl Scene {
+    /// Whether [`Scene::intersect_many`] interleaves its rays: where what a traversal reads
+    /// (the tree's nodes, the primitives' vertex indices and positions) exceeds the level-2
+    /// cache, so that node loads miss it. Where it fits, there is no miss to hide, and the
+    /// interleaving's cost (about a quarter more instructions, and branches that the
+    /// predictor sees mixed from several rays) made it slower: see docs/performance.md.
+    pub fn streams(&self) -> bool {
+        use std::mem::size_of_val;
+        let bytes = self.bvh.memory_bytes()
+            + size_of_val(&self.tris[..])
+            + size_of_val(&self.positions[..]);
+        bytes > l2_bytes()
+    }
+
     /// [`Scene::intersect_many`] with `K` rays in flight (`K` ≤ 1: one by one), for the
     /// tests and benchmarks, which compare the choices.
     #[doc(hidden)]

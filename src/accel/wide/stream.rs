@@ -13,8 +13,9 @@
 //! rays in flight too.
 //!
 //! Each ray's decisions are those of [`WideBvh::intersect`] by construction: both repeat
-//! [`Closest::step`], which holds all of a ray's state; the interleaving changes only when
-//! its steps run, never what they compute.
+//! the one step `closest_step!` (in `accel/wide.rs`), here on a [`Closest`], which holds all
+//! of a ray's state; the interleaving changes only when its steps run, never what they
+//! compute.
 
 use super::{ChildRef, Node4, RayBoxes, Stack, WideBvh, EMPTY, LEAF, WIDEN};
 use crate::accel::prefetch;
@@ -68,74 +69,17 @@ impl Closest {
         bvh: &WideBvh,
         hit: &mut F,
     ) -> bool {
-        let cur = self.cur;
-        // Empty child slots have empty boxes and are never entered, so only the root can be
-        // EMPTY, and `start` takes no such tree.
-        if cur & LEAF != 0 {
-            let first = ((cur & !LEAF) >> 4) as usize;
-            for p in first..first + (cur & 15) as usize {
-                if let Some(t) = hit(p, self.t_max) {
-                    self.t_max = t;
-                    self.found = true;
-                }
-            }
-        } else {
-            let node = bvh.node(cur);
-            let (mut mask, tnear) = self.r.test(node, self.t_max);
-            if mask != 0 {
-                let t = tnear.to_array();
-                let a = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                if mask == 0 {
-                    self.cur = node.child[a];
-                    return true;
-                }
-                let b = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                if mask == 0 {
-                    // Two children, the commonest case: the nearer next, the other kept.
-                    let (near, far) = if t[a] <= t[b] { (a, b) } else { (b, a) };
-                    self.stack.push((node.child[far], t[far]));
-                    self.cur = node.child[near];
-                    return true;
-                }
-                // Three or four: sorted by entry distance, farthest pushed first.
-                let mut order = [(0f32, 0u32); 4];
-                order[0] = (t[a], node.child[a]);
-                order[1] = (t[b], node.child[b]);
-                let mut n = 2;
-                while mask != 0 {
-                    let s = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    order[n] = (t[s], node.child[s]);
-                    n += 1;
-                }
-                for i in 1..n {
-                    let mut j = i;
-                    while j > 0 && order[j - 1].0 < order[j].0 {
-                        order.swap(j - 1, j);
-                        j -= 1;
-                    }
-                }
-                for &(tc, c) in &order[..n - 1] {
-                    self.stack.push((c, tc));
-                }
-                self.cur = order[n - 1].1;
-                return true;
-            }
-        }
-        // The next postponed child whose box the ray still enters before the nearest hit
-        // (widened as `RayBoxes::test` widens it, so no box the test would enter is dropped).
-        loop {
-            match self.stack.pop() {
-                Some((c, tc)) if tc <= self.t_max * WIDEN => {
-                    self.cur = c;
-                    return true;
-                }
-                Some(_) => {}
-                None => return false,
-            }
-        }
+        closest_step!(
+            bvh,
+            self.r,
+            self.stack,
+            self.cur,
+            self.t_max,
+            self.found,
+            hit,
+            { return true },
+            { return false }
+        )
     }
 }
 
