@@ -11,7 +11,8 @@
 //! each round in a new order, and each figure is the minimum over the rounds (the machine is
 //! shared), with the spread (max/min) beside it. Every batch's answers are checked equal to
 //! the one-at-a-time ones, bit for bit, before anything is timed. `--only VARIANT` traces
-//! with that variant only, once (`valgrind --tool=callgrind --toggle-collect='*time*'`).
+//! with that variant only, once (`valgrind --tool=callgrind
+//! --toggle-collect='*intersect_many::time*'`).
 
 use glam::Vec2;
 use mcrt::geometry::Ray;
@@ -100,7 +101,9 @@ const VARIANTS: [(&str, Trace); 5] = [
     ("32", |s, r, o| s.intersect_many_k::<32>(r, o)),
 ];
 
-/// Seconds to trace `rays` in batches of `batch` with `f`.
+/// Seconds to trace `rays` in batches of `batch` with `f` (not inlined, for callgrind's
+/// `--toggle-collect='*intersect_many::time*'`).
+#[inline(never)]
 fn time(
     scene: &Scene,
     rays: &[Ray],
@@ -193,7 +196,7 @@ fn main() {
             println!("  {name}: {} rays", rays.len());
             for (v, (vname, _)) in VARIANTS.iter().enumerate() {
                 println!(
-                    "    {vname:>10}: {:7.1} ns/ray (spread {:.2}), one by one / this {:.3}",
+                    "    K = {vname:>2}: {:7.1} ns/ray (spread {:.2}), one by one / this {:.3}",
                     best[v] * 1e9 / rays.len() as f64,
                     worst[v] / best[v],
                     best[0] / best[v],
