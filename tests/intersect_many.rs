@@ -1,5 +1,6 @@
 //! `Scene::intersect_many` (several rays' traversals interleaved) gives for every ray the same
-//! bits as `Scene::intersect`, in every field of the interaction: on a mesh with vertex
+//! bits as `Scene::intersect`, in every field of the interaction, and `Scene::occluded_many`
+//! the answers of `Scene::occluded`: on a mesh with vertex
 //! normals and texture coordinates, spheres, a masked scene, instanced scenes, an empty scene,
 //! a small scene traced by brute force, and a grid of duplicated triangles where rays through
 //! shared edges and vertices meet equally near hits; with random rays, rays that miss,
@@ -224,7 +225,50 @@ fn check(scene: &Scene, rays: &[Ray]) -> usize {
             at = from + len;
         }
     }
+    check_occluded(scene, rays);
     want.iter().filter(|w| w.is_some()).count()
+}
+
+/// Checks `occluded_many` (and each number of rays in flight) against `occluded`, with
+/// distances around each ray's closest hit (half, equal, just beyond, infinite, 1).
+fn check_occluded(scene: &Scene, rays: &[Ray]) {
+    let t_max: Vec<f32> = rays
+        .iter()
+        .enumerate()
+        .map(|(k, r)| {
+            let t = scene.intersect(r).map_or(10.0, |s| s.t);
+            [t * 0.5, t, t * 1.0001, f32::INFINITY, 1.0][k % 5]
+        })
+        .collect();
+    let want: Vec<bool> = rays
+        .iter()
+        .zip(&t_max)
+        .map(|(r, &t)| scene.occluded(r, t))
+        .collect();
+    type Many = fn(&Scene, &[Ray], &[f32], &mut [bool]);
+    let variants: [(usize, Many); 4] = [
+        (mcrt::scene::stream::STREAM, Scene::occluded_many),
+        (2, Scene::occluded_many_k::<2>),
+        (8, Scene::occluded_many_k::<8>),
+        (32, Scene::occluded_many_k::<32>),
+    ];
+    for (k, many) in variants {
+        for len in [0, 1, k - 1, k, k + 1, 1000] {
+            let len = len.min(rays.len());
+            let mut out = vec![false; len];
+            many(scene, &rays[..len], &t_max[..len], &mut out);
+            assert_eq!(out, want[..len], "occlusion, K = {k}, batch of {len}");
+        }
+    }
+    // Both answers occur wherever a ray hits something (half of those stop short of it).
+    let blocked = want.iter().filter(|&&b| b).count();
+    if rays.iter().any(|r| scene.intersect(r).is_some()) {
+        assert!(
+            blocked > 0 && blocked < want.len(),
+            "{blocked} of {} blocked",
+            want.len()
+        );
+    }
 }
 
 /// At least a fifth and at most nineteen twentieths of `n` rays hit: both cases are tested.

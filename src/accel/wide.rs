@@ -87,6 +87,44 @@ macro_rules! closest_step {
     }};
 }
 
+/// One step of the occlusion traversal: the box test of node `$cur`'s children (the first
+/// entered becomes `$cur`, the others are pushed on `$stack`, then `$next`), or the tests of
+/// leaf `$cur`'s primitives by `$hit` (`$blocked` at the first hit); then, where no child
+/// was entered, the next postponed child becomes `$cur` (then `$next`), or with none left,
+/// `$done`. Written once for [`WideBvh::occluded`] and [`stream::Any`]'s step.
+macro_rules! any_step {
+    ($bvh:expr, $r:expr, $stack:expr, $cur:expr, $t_max:expr, $hit:expr,
+     $next:block, $blocked:block, $done:block) => {{
+        // Empty child slots have empty boxes and are never entered, so only the root can be
+        // EMPTY, and the callers check it.
+        if $cur & LEAF != 0 {
+            let first = (($cur & !LEAF) >> 4) as usize;
+            for p in first..first + ($cur & 15) as usize {
+                if $hit(p, $t_max) $blocked
+            }
+        } else {
+            let node = $bvh.node($cur);
+            let (mut mask, _) = $r.test(node, $t_max);
+            if mask != 0 {
+                $cur = node.child[mask.trailing_zeros() as usize];
+                mask &= mask - 1;
+                while mask != 0 {
+                    $stack.push(node.child[mask.trailing_zeros() as usize]);
+                    mask &= mask - 1;
+                }
+                $next
+            }
+        }
+        match $stack.pop() {
+            Some(c) => {
+                $cur = c;
+                $next
+            }
+            None => $done,
+        }
+    }};
+}
+
 mod packet;
 mod stream;
 
@@ -340,33 +378,18 @@ impl WideBvh {
         let r = RayBoxes::new(ray);
         let mut stack = Stack::<u32>::new();
         let mut cur = self.root;
-        loop {
-            // Empty child slots have empty boxes and are never entered, so only the root can
-            // be EMPTY, and it was checked above.
-            if cur & LEAF != 0 {
-                let first = ((cur & !LEAF) >> 4) as usize;
-                for p in first..first + (cur & 15) as usize {
-                    if hit(p, t_max) {
-                        return true;
-                    }
-                }
-            } else {
-                let node = self.node(cur);
-                let (mut mask, _) = r.test(node, t_max);
-                if mask != 0 {
-                    cur = node.child[mask.trailing_zeros() as usize];
-                    mask &= mask - 1;
-                    while mask != 0 {
-                        stack.push(node.child[mask.trailing_zeros() as usize]);
-                        mask &= mask - 1;
-                    }
-                    continue;
-                }
-            }
-            match stack.pop() {
-                Some(c) => cur = c,
-                None => return false,
-            }
+        'trav: loop {
+            any_step!(
+                self,
+                r,
+                stack,
+                cur,
+                t_max,
+                hit,
+                { continue 'trav },
+                { return true },
+                { return false }
+            )
         }
     }
 }

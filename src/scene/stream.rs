@@ -100,6 +100,60 @@ impl Scene {
         );
     }
 
+    /// Occlusion of several rays: `out[k]` is [`Scene::occluded`]`(&rays[k], t_max[k])`,
+    /// their traversals interleaved as [`Scene::intersect_many`]'s are. Panics if the slices'
+    /// lengths differ.
+    pub fn occluded_many(&self, rays: &[Ray], t_max: &[f32], out: &mut [bool]) {
+        if self.streams() {
+            self.occluded_many_k::<STREAM>(rays, t_max, out);
+        } else {
+            self.occluded_many_k::<1>(rays, t_max, out);
+        }
+    }
+
+    /// [`Scene::occluded_many`] with `K` rays in flight (`K` ≤ 1: one by one), for the tests
+    /// and benchmarks.
+    #[doc(hidden)]
+    pub fn occluded_many_k<const K: usize>(&self, rays: &[Ray], t_max: &[f32], out: &mut [bool]) {
+        assert!(
+            rays.len() == t_max.len() && rays.len() == out.len(),
+            "one distance and one output per ray"
+        );
+        if K <= 1 || self.is_flat() {
+            for ((ray, &t), o) in rays.iter().zip(t_max).zip(out.iter_mut()) {
+                *o = self.occluded(ray, t);
+            }
+            return;
+        }
+        let done = |k: usize, blocked: bool| {
+            out[k] = blocked
+                || (self.instances.as_ref()).is_some_and(|inst| inst.occluded(&rays[k], t_max[k]));
+        };
+        let leaf = |first, count| self.prefetch_prims(first, count);
+        if self.masked {
+            self.bvh.occluded_stream::<K>(
+                rays,
+                t_max,
+                |k, i, t| {
+                    let ray = &rays[k];
+                    self.hit(ray, i, t)
+                        .is_some_and(|(t, u, v)| self.seen(ray, i, u, v, t))
+                },
+                leaf,
+                done,
+            );
+        } else {
+            self.bvh.occluded_stream::<K>(
+                rays,
+                t_max,
+                #[inline(always)]
+                |k, i, t| self.hit(&rays[k], i, t).is_some(),
+                leaf,
+                done,
+            );
+        }
+    }
+
     /// Prefetches the vertex indices of primitives `first..first + count` (BVH order), what
     /// a leaf's tests read first.
     #[inline(always)]

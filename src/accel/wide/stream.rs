@@ -14,7 +14,8 @@
 //!
 //! Each ray's decisions are those of [`WideBvh::intersect`] by construction: both repeat
 //! the one step `closest_step!` (in `accel/wide.rs`), here on a [`Closest`], which holds all
-//! of a ray's state; the interleaving changes only when its steps run, never what they
+//! of a ray's state (and [`WideBvh::occluded_stream`]'s those of [`WideBvh::occluded`],
+//! `any_step!`); the interleaving changes only when its steps run, never what they
 //! compute.
 
 use super::{ChildRef, Node4, RayBoxes, Stack, WideBvh, EMPTY, LEAF, WIDEN};
@@ -22,28 +23,29 @@ use crate::accel::prefetch;
 use crate::geometry::Ray;
 use std::mem::MaybeUninit;
 
-/// One ray's closest-hit traversal between steps: its prepared ray, the postponed children
-/// with their entry distances, the node or leaf its next step visits, the distance of the
-/// nearest hit so far and whether there is one.
-pub(crate) struct Closest {
+/// One ray's traversal between steps: its prepared ray, the postponed children (`E`: a
+/// child reference, with its entry distance for the closest hit), the node or leaf its next
+/// step visits, its `t_max` (the distance of the nearest hit so far, for the closest hit),
+/// and whether it hit anything.
+pub(crate) struct Trav<E: Copy> {
     r: RayBoxes,
-    stack: Stack<(u32, f32)>,
+    stack: Stack<E>,
     cur: ChildRef,
-    pub(crate) t_max: f32,
-    pub(crate) found: bool,
+    t_max: f32,
+    found: bool,
 }
 
-impl Closest {
+/// A closest-hit traversal.
+pub(crate) type Closest = Trav<(u32, f32)>;
+/// An occlusion (any-hit) traversal.
+pub(crate) type Any = Trav<u32>;
+
+impl<E: Copy> Trav<E> {
     /// Starts the traversal of `ray` up to `t_max` in `slot` (left uninitialised until now:
     /// only the stack's length is written, not its items) at the root of `bvh`, which must
     /// not be `EMPTY`.
     #[inline(always)]
-    pub(crate) fn start<'a>(
-        slot: &'a mut MaybeUninit<Closest>,
-        bvh: &WideBvh,
-        ray: &Ray,
-        t_max: f32,
-    ) -> &'a mut Closest {
+    fn start(slot: &mut MaybeUninit<Trav<E>>, bvh: &WideBvh, ray: &Ray, t_max: f32) {
         debug_assert!(bvh.root != EMPTY);
         let p = slot.as_mut_ptr();
         // SAFETY: every field but the stack's items is written here, and those are
@@ -54,21 +56,34 @@ impl Closest {
             std::ptr::addr_of_mut!((*p).cur).write(bvh.root);
             std::ptr::addr_of_mut!((*p).t_max).write(t_max);
             std::ptr::addr_of_mut!((*p).found).write(false);
-            slot.assume_init_mut()
         }
     }
 
-    /// One step: the box test of the current node's children (the nearest entered is next,
-    /// the others postponed, farthest first), or the tests of the current leaf's primitives
-    /// by `hit` (see [`WideBvh::intersect`]); then, where no child was entered, the next
-    /// postponed child that the ray still enters before its nearest hit. False when none is
-    /// left: the traversal is over.
+    /// This traversal made a copy of `f` (the stack's live items only).
     #[inline(always)]
-    pub(crate) fn step<F: FnMut(usize, f32) -> Option<f32>>(
-        &mut self,
-        bvh: &WideBvh,
-        hit: &mut F,
-    ) -> bool {
+    fn take(&mut self, f: &Trav<E>) {
+        self.r = f.r;
+        self.cur = f.cur;
+        self.t_max = f.t_max;
+        self.found = f.found;
+        self.stack.len = f.stack.len;
+        self.stack.items[..f.stack.len].copy_from_slice(&f.stack.items[..f.stack.len]);
+    }
+}
+
+/// One step of a traversal, with `hit` the caller's primitive test.
+pub(crate) trait Step {
+    /// What the primitive test answers.
+    type Hit;
+    /// One step; false when the traversal is over.
+    fn step<F: FnMut(usize, f32) -> Self::Hit>(&mut self, bvh: &WideBvh, hit: &mut F) -> bool;
+}
+
+impl Step for Closest {
+    type Hit = Option<f32>;
+    /// One step of [`WideBvh::intersect`]'s traversal (`closest_step!`).
+    #[inline(always)]
+    fn step<F: FnMut(usize, f32) -> Option<f32>>(&mut self, bvh: &WideBvh, hit: &mut F) -> bool {
         closest_step!(
             bvh,
             self.r,
@@ -83,19 +98,41 @@ impl Closest {
     }
 }
 
-/// A ray in flight in [`WideBvh::intersect_stream`]: its traversal, its index in the batch,
-/// and the caller's state for it.
-struct Slot<S> {
-    c: Closest,
+impl Step for Any {
+    type Hit = bool;
+    /// One step of [`WideBvh::occluded`]'s traversal (`any_step!`); a hit ends it.
+    #[inline(always)]
+    fn step<F: FnMut(usize, f32) -> bool>(&mut self, bvh: &WideBvh, hit: &mut F) -> bool {
+        any_step!(
+            bvh,
+            self.r,
+            self.stack,
+            self.cur,
+            self.t_max,
+            hit,
+            { return true },
+            {
+                self.found = true;
+                return false;
+            },
+            { return false }
+        )
+    }
+}
+
+/// A ray in flight in [`WideBvh::stream`]: its traversal, its index in the batch, and the
+/// caller's state for it.
+struct Slot<E: Copy, S> {
+    c: Trav<E>,
     k: usize,
     s: S,
 }
 
-impl<S: Copy> Slot<S> {
-    /// Starts ray `k` in `slot` (see [`Closest::start`]).
+impl<E: Copy, S: Copy> Slot<E, S> {
+    /// Starts ray `k` in `slot` (see [`Trav::start`]).
     #[inline(always)]
     fn start(
-        slot: &mut MaybeUninit<Slot<S>>,
+        slot: &mut MaybeUninit<Slot<E, S>>,
         bvh: &WideBvh,
         ray: &Ray,
         t_max: f32,
@@ -106,23 +143,17 @@ impl<S: Copy> Slot<S> {
         // SAFETY: `c` is started in place (MaybeUninit has the layout of what it wraps), `k`
         // and `s` are written: the whole slot is initialised.
         unsafe {
-            let c = &mut *(std::ptr::addr_of_mut!((*p).c) as *mut MaybeUninit<Closest>);
-            Closest::start(c, bvh, ray, t_max);
+            let c = &mut *(std::ptr::addr_of_mut!((*p).c) as *mut MaybeUninit<Trav<E>>);
+            Trav::start(c, bvh, ray, t_max);
             std::ptr::addr_of_mut!((*p).k).write(k);
             std::ptr::addr_of_mut!((*p).s).write(s);
         }
     }
 
-    /// This slot made a copy of `from` (the stack's live items only).
+    /// This slot made a copy of `from`.
     #[inline(always)]
-    fn take(&mut self, from: &Slot<S>) {
-        let (c, f) = (&mut self.c, &from.c);
-        c.r = f.r;
-        c.cur = f.cur;
-        c.t_max = f.t_max;
-        c.found = f.found;
-        c.stack.len = f.stack.len;
-        c.stack.items[..f.stack.len].copy_from_slice(&f.stack.items[..f.stack.len]);
+    fn take(&mut self, from: &Slot<E, S>) {
+        self.c.take(&from.c);
         self.k = from.k;
         self.s = from.s;
     }
@@ -141,10 +172,50 @@ impl WideBvh {
         rays: &[Ray],
         t_max: f32,
         init: S,
-        mut hit: impl FnMut(usize, &mut S, usize, f32) -> Option<f32>,
+        hit: impl FnMut(usize, &mut S, usize, f32) -> Option<f32>,
+        leaf: impl Fn(usize, usize),
+        done: impl FnMut(usize, bool, &S),
+    ) {
+        self.stream::<(u32, f32), K, S>(rays, |_| t_max, init, hit, leaf, done);
+    }
+
+    /// Whether each of `rays` hits anything before its `t_max[k]`, `K` rays in flight:
+    /// `hit(k, prim, t_max)` tests primitive `prim` as [`WideBvh::occluded`]'s `hit` does,
+    /// and `done(k, blocked)` gets each ray's answer as its traversal ends; `leaf` as for
+    /// [`WideBvh::intersect_stream`].
+    #[inline(always)]
+    pub fn occluded_stream<const K: usize>(
+        &self,
+        rays: &[Ray],
+        t_max: &[f32],
+        mut hit: impl FnMut(usize, usize, f32) -> bool,
+        leaf: impl Fn(usize, usize),
+        mut done: impl FnMut(usize, bool),
+    ) {
+        self.stream::<u32, K, ()>(
+            rays,
+            |k| t_max[k],
+            (),
+            |k, _, p, t| hit(k, p, t),
+            leaf,
+            |k, blocked, _| done(k, blocked),
+        );
+    }
+
+    /// The traversals of `rays`, `K` in flight, each a step in turn (see
+    /// [`WideBvh::intersect_stream`]).
+    #[inline(always)]
+    fn stream<E: Copy, const K: usize, S: Copy>(
+        &self,
+        rays: &[Ray],
+        t_max: impl Fn(usize) -> f32,
+        init: S,
+        mut hit: impl FnMut(usize, &mut S, usize, f32) -> <Trav<E> as Step>::Hit,
         leaf: impl Fn(usize, usize),
         mut done: impl FnMut(usize, bool, &S),
-    ) {
+    ) where
+        Trav<E>: Step,
+    {
         if self.root == EMPTY {
             for k in 0..rays.len() {
                 done(k, false, &init);
@@ -152,10 +223,11 @@ impl WideBvh {
             return;
         }
         // The rays in flight: `slots[..live]`, each taking a step in turn.
-        let mut slots: [MaybeUninit<Slot<S>>; K] = [const { MaybeUninit::uninit() }; K];
+        let mut slots: [MaybeUninit<Slot<E, S>>; K] = [const { MaybeUninit::uninit() }; K];
         let mut live = 0;
         while live < K && live < rays.len() {
-            Slot::start(&mut slots[live], self, &rays[live], t_max, live, init);
+            let t = t_max(live);
+            Slot::start(&mut slots[live], self, &rays[live], t, live, init);
             live += 1;
         }
         let mut next = live;
@@ -170,7 +242,8 @@ impl WideBvh {
             } else {
                 done(k, slot.c.found, &slot.s);
                 if next < rays.len() {
-                    Slot::start(&mut slots[i], self, &rays[next], t_max, next, init);
+                    let t = t_max(next);
+                    Slot::start(&mut slots[i], self, &rays[next], t, next, init);
                     next += 1;
                     i += 1;
                 } else {
