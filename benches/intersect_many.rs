@@ -2,7 +2,8 @@
 //! on the rays a path tracer traces: the camera rays of a 64×64 image at 4 samples a pixel,
 //! then three bounces, each ray leaving its hit in a cosine-distributed direction about the
 //! shading normal (on the side it came from), in batches of the size the stream path tracer
-//! hands over.
+//! hands over; and `Scene::occluded` against `Scene::occluded_many` on a shadow ray from
+//! each hit.
 //!
 //! cargo bench --bench intersect_many -- [SCENE.xml ...] [--batch N] [--rounds N]
 //!
@@ -14,7 +15,7 @@
 //! with that variant only, once (`valgrind --tool=callgrind
 //! --toggle-collect='*intersect_many::time*'`).
 
-use glam::Vec2;
+use glam::{Vec2, Vec3A};
 use mcrt::geometry::Ray;
 use mcrt::scene::{Interaction, Scene};
 use std::path::Path;
@@ -32,10 +33,14 @@ fn unit(seed: u64) -> f32 {
     ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
 }
 
-/// The rays of each depth: the camera's, then each bounce's.
-fn path_rays(scene: &Scene) -> Vec<Vec<Ray>> {
+/// The rays of each depth: the camera's, then each bounce's; and shadow rays with their
+/// distances, one from each hit towards a point drawn uniformly in the scene's bounds (as
+/// a light sample's, the segment's end not reached: 1 − 10⁻⁴).
+fn path_rays(scene: &Scene) -> (Vec<Vec<Ray>>, Vec<Ray>, Vec<f32>) {
     let cam = scene.camera(None).expect("a camera").build(RES, RES);
     let mut levels = vec![Vec::new()];
+    let (mut shadow, mut shadow_t) = (Vec::new(), Vec::new());
+    let bb = scene.bounds().expect("a scene with something in it");
     for y in 0..RES {
         for x in 0..RES {
             for s in 0..SPP {
@@ -61,10 +66,13 @@ fn path_rays(scene: &Scene) -> Vec<Vec<Ray>> {
             let (r, phi) = (u1.sqrt(), std::f32::consts::TAU * u2);
             let d = a * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt();
             next.push(si.spawn_ray(d));
+            let u = Vec3A::new(unit(id + 100), unit(id + 101), unit(id + 102));
+            shadow.push(si.spawn_ray(bb.min + (bb.max - bb.min) * u - si.p));
+            shadow_t.push(1.0 - 1e-4);
         }
         levels.push(next);
     }
-    levels
+    (levels, shadow, shadow_t)
 }
 
 /// All fields of an answer, as bits.
@@ -149,7 +157,7 @@ fn main() {
         let desc = mcrt::load_scene_with(Path::new(path), &opts)
             .unwrap_or_else(|e| panic!("{path}: {e} (run python3 bench/make_scenes.py)"));
         let scene = Scene::build(desc);
-        let levels = path_rays(&scene);
+        let (levels, shadow, shadow_t) = path_rays(&scene);
         let sets = [
             ("camera", levels[0].clone()),
             ("bounces", levels[1..].concat()),
@@ -203,5 +211,93 @@ fn main() {
                 );
             }
         }
+        shadows(&scene, &shadow, &shadow_t, batch, rounds, only.as_deref());
+    }
+}
+
+type Occlusion = fn(&Scene, &[Ray], &[f32], &mut [bool]);
+
+fn occluded_one_by_one(s: &Scene, rays: &[Ray], t: &[f32], out: &mut [bool]) {
+    for ((r, &t), o) in rays.iter().zip(t).zip(out) {
+        *o = s.occluded(r, t);
+    }
+}
+
+const SHADOW_VARIANTS: [(&str, Occlusion); 5] = [
+    ("1", occluded_one_by_one),
+    ("4", |s, r, t, o| s.occluded_many_k::<4>(r, t, o)),
+    ("8", |s, r, t, o| s.occluded_many_k::<8>(r, t, o)),
+    ("16", |s, r, t, o| s.occluded_many_k::<16>(r, t, o)),
+    ("32", |s, r, t, o| s.occluded_many_k::<32>(r, t, o)),
+];
+
+/// Seconds to trace shadow rays in batches of `batch` with `f`.
+#[inline(never)]
+fn time_shadows(scene: &Scene, rays: &[Ray], t: &[f32], batch: usize, f: Occlusion) -> f64 {
+    let mut out = vec![false; rays.len()];
+    let start = Instant::now();
+    for ((r, t), o) in rays
+        .chunks(batch)
+        .zip(t.chunks(batch))
+        .zip(out.chunks_mut(batch))
+    {
+        f(scene, r, t, o);
+    }
+    std::hint::black_box(&out);
+    start.elapsed().as_secs_f64()
+}
+
+/// The shadow rays one by one against `occluded_many_k` (answers checked equal first).
+fn shadows(
+    scene: &Scene,
+    rays: &[Ray],
+    t: &[f32],
+    batch: usize,
+    rounds: usize,
+    only: Option<&str>,
+) {
+    if let Some(v) = only {
+        let f = SHADOW_VARIANTS
+            .iter()
+            .find(|(n, _)| *n == v)
+            .expect("a variant")
+            .1;
+        let s = time_shadows(scene, rays, t, batch, f);
+        println!(
+            "  shadow: {} rays, {v}: {:.1} ns/ray",
+            rays.len(),
+            s * 1e9 / rays.len() as f64
+        );
+        return;
+    }
+    let mut want = vec![false; rays.len()];
+    occluded_one_by_one(scene, rays, t, &mut want);
+    for (vname, f) in &SHADOW_VARIANTS[1..] {
+        let mut out = vec![false; rays.len()];
+        f(scene, rays, t, &mut out);
+        assert!(
+            out == want,
+            "shadow rays, {vname}: answers differ from one by one"
+        );
+    }
+    let mut best = [f64::INFINITY; SHADOW_VARIANTS.len()];
+    let mut worst = [0f64; SHADOW_VARIANTS.len()];
+    for round in 0..rounds {
+        for j in 0..SHADOW_VARIANTS.len() {
+            let v = (j + round) % SHADOW_VARIANTS.len();
+            let s = time_shadows(scene, rays, t, batch, SHADOW_VARIANTS[v].1);
+            best[v] = best[v].min(s);
+            worst[v] = worst[v].max(s);
+        }
+    }
+    let blocked = want.iter().filter(|&&b| b).count();
+    println!("  shadow: {} rays ({blocked} blocked)", rays.len());
+    for (v, (vname, _)) in SHADOW_VARIANTS.iter().enumerate() {
+        println!(
+            "    K = {vname:>2}: {:7.1} ns/ray (spread {:.2}), one by one / this {:.3}",
+            best[v] * 1e9 / rays.len() as f64,
+            worst[v] / best[v],
+            best[0] / best[v],
+        );
     }
 }

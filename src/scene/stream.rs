@@ -16,7 +16,7 @@ use crate::geometry::Ray;
 
 /// Rays in flight in [`Scene::intersect_many`] (see docs/performance.md for the
 /// measurement that chose it).
-pub const STREAM: usize = 16;
+pub const STREAM: usize = 8;
 
 /// Bytes of the CPU's level-2 cache (of the first CPU, as Linux reports it), 1 MiB where it
 /// is not known.
