@@ -101,6 +101,8 @@ impl Step for Closest {
 impl Step for Any {
     type Hit = bool;
     /// One step of [`WideBvh::occluded`]'s traversal (`any_step!`); a hit ends it.
+    // (The macro places `$next` and `$done` in tail position as well as in a loop's body.)
+    #[allow(clippy::needless_return)]
     #[inline(always)]
     fn step<F: FnMut(usize, f32) -> bool>(&mut self, bvh: &WideBvh, hit: &mut F) -> bool {
         any_step!(
