@@ -5,7 +5,9 @@
 //! hands over; and `Scene::occluded` against `Scene::occluded_many` on a shadow ray from
 //! each hit.
 //!
-//! cargo bench --bench intersect_many -- [SCENE.xml ...] [--batch N] [--rounds N]
+//! cargo bench --bench intersect_many -- [SCENE.xml ...] [--bunny N ...] [--batch N] [--rounds N]
+//!
+//! (`--bunny N`: the benchmarks' bunny with each triangle split into N², 3 674·N² triangles.)
 //!
 //! Defaults: bench/out/scenes/gallery.xml and bench/out/scenes/bunny-box.xml (written by
 //! `python3 bench/make_scenes.py`), batches of 256, 7 rounds. The variants run alternately,
@@ -14,6 +16,8 @@
 //! the one-at-a-time ones, bit for bit, before anything is timed. `--only VARIANT` traces
 //! with that variant only, once (`valgrind --tool=callgrind
 //! --toggle-collect='*intersect_many::time*'`).
+
+mod common;
 
 use glam::{Vec2, Vec3A};
 use mcrt::geometry::Ray;
@@ -143,6 +147,7 @@ fn main() {
                     .expect("--rounds N")
             }
             "--only" => only = Some(args.next().expect("--only VARIANT")),
+            "--bunny" => scenes.push(format!("bunny:{}", args.next().expect("--bunny N"))),
             "--bench" => {}
             _ => scenes.push(a),
         }
@@ -153,9 +158,15 @@ fn main() {
             .to_vec();
     }
     for path in &scenes {
-        let opts = mcrt::LoadOptions::default();
-        let desc = mcrt::load_scene_with(Path::new(path), &opts)
-            .unwrap_or_else(|e| panic!("{path}: {e} (run python3 bench/make_scenes.py)"));
+        let desc = match path.strip_prefix("bunny:") {
+            // The benchmarks' bunny, each triangle split into N² (`--bunny N`).
+            Some(n) => common::bunny_scene(common::subdivide(
+                &common::bunny(),
+                n.parse().expect("--bunny N"),
+            )),
+            None => mcrt::load_scene_with(Path::new(path), &mcrt::LoadOptions::default())
+                .unwrap_or_else(|e| panic!("{path}: {e} (run python3 bench/make_scenes.py)")),
+        };
         let scene = Scene::build(desc);
         let (levels, shadow, shadow_t) = path_rays(&scene);
         let sets = [
@@ -163,8 +174,10 @@ fn main() {
             ("bounces", levels[1..].concat()),
         ];
         println!(
-            "{path}: {} triangles, batches of {batch}, {rounds} rounds",
-            scene.triangle_count()
+            "{path}: {} triangles, {:.1} MB, streams: {}, batches of {batch}, {rounds} rounds",
+            scene.triangle_count(),
+            scene.memory_bytes() as f64 / 1e6,
+            scene.streams()
         );
         for (name, rays) in &sets {
             if let Some(v) = &only {
