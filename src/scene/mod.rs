@@ -15,6 +15,7 @@ pub mod obj;
 mod perturb;
 pub mod ply;
 pub mod serialized;
+pub mod stream;
 pub mod text;
 pub mod toml;
 pub mod xml;
@@ -31,6 +32,9 @@ use crate::material::Material;
 use glam::{Vec2, Vec3A, Vec4};
 
 pub const NO_LIGHT: u32 = u32::MAX;
+
+/// [`Scene::closest_kept`]'s nearest hit before it has one.
+const NO_HIT: (usize, f32, f32, f32) = (usize::MAX, 0.0, 0.0, 0.0);
 
 /// `Scene::tris` entry of a sphere: `[SPHERE, index into Scene::spheres, 0]`.
 pub const SPHERE: u32 = u32::MAX;
@@ -235,11 +239,13 @@ impl Scene {
 
     /// Closest hits of several rays: `out[k]` is [`Scene::intersect`]`(&rays[k])`, the same
     /// bits, for the stream path tracer, which traces a batch of independent rays at once so
-    /// that their memory loads can overlap. Panics if the slices' lengths differ.
+    /// that their memory loads can overlap (see [`stream`]; one by one where the scene fits
+    /// in the cache, [`Scene::streams`]). Panics if the slices' lengths differ.
     pub fn intersect_many(&self, rays: &[Ray], out: &mut [Option<Interaction>]) {
-        assert_eq!(rays.len(), out.len());
-        for (ray, o) in rays.iter().zip(out) {
-            *o = self.intersect(ray);
+        if self.streams() {
+            self.intersect_many_k::<{ stream::STREAM }>(rays, out);
+        } else {
+            self.intersect_many_k::<1>(rays, out);
         }
     }
 
@@ -273,23 +279,35 @@ impl Scene {
         keep: impl Fn(usize, f32, f32, f32) -> bool,
     ) -> Option<(usize, f32, f32, f32)> {
         // Of equally near hits the lowest primitive, whatever the order the traversal
-        // visits them in (as `accel::flat` finds them): a primitive is tested without a
-        // bound (its tests read `t_max` only to accept their answer), and its hit kept if
-        // nearer than the nearest so far, or as near and lower.
-        let mut best = (usize::MAX, 0.0f32, 0.0f32, 0.0f32);
+        // visits them in (as `accel::flat` finds them; see `keep_nearer`).
+        let mut best = NO_HIT;
         let found = self.bvh.intersect(
             ray,
             t_max,
             #[inline(always)]
-            |i, t_max| {
-                let (t, u, v) = self.hit(ray, i, f32::INFINITY)?;
-                ((t < t_max || (t == t_max && i < best.0)) && keep(i, u, v, t)).then(|| {
-                    best = (i, u, v, t);
-                    t
-                })
-            },
+            |i, t_max| self.keep_nearer(ray, &mut best, i, t_max, &keep),
         );
         found.then_some(best)
+    }
+
+    /// The distance of primitive `i`'s hit by `ray` if `keep` keeps it and it is nearer than
+    /// `t_max` or as near and lower than `best`'s primitive; `best` then becomes it
+    /// (primitive, u, v, t). The primitive is tested without a bound (its tests read `t_max`
+    /// only to accept their answer), so the rule holds in any order of visits.
+    #[inline(always)]
+    fn keep_nearer(
+        &self,
+        ray: &Ray,
+        best: &mut (usize, f32, f32, f32),
+        i: usize,
+        t_max: f32,
+        keep: &impl Fn(usize, f32, f32, f32) -> bool,
+    ) -> Option<f32> {
+        let (t, u, v) = self.hit(ray, i, f32::INFINITY)?;
+        ((t < t_max || (t == t_max && i < best.0)) && keep(i, u, v, t)).then(|| {
+            *best = (i, u, v, t);
+            t
+        })
     }
 
     #[inline(always)]

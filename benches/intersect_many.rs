@@ -1,0 +1,316 @@
+//! `Scene::intersect` one ray at a time against `Scene::intersect_many` with K rays in flight,
+//! on the rays a path tracer traces: the camera rays of a 64×64 image at 4 samples a pixel,
+//! then three bounces, each ray leaving its hit in a cosine-distributed direction about the
+//! shading normal (on the side it came from), in batches of the size the stream path tracer
+//! hands over; and `Scene::occluded` against `Scene::occluded_many` on a shadow ray from
+//! each hit.
+//!
+//! cargo bench --bench intersect_many -- [SCENE.xml ...] [--bunny N ...] [--batch N] [--rounds N]
+//!
+//! (`--bunny N`: the benchmarks' bunny with each triangle split into N², 3 674·N² triangles.)
+//!
+//! Defaults: bench/out/scenes/gallery.xml and bench/out/scenes/bunny-box.xml (written by
+//! `python3 bench/make_scenes.py`), batches of 256, 7 rounds. The variants run alternately,
+//! each round in a new order, and each figure is the minimum over the rounds (the machine is
+//! shared), with the spread (max/min) beside it. Every batch's answers are checked equal to
+//! the one-at-a-time ones, bit for bit, before anything is timed. `--only VARIANT` traces
+//! with that variant only, once (`valgrind --tool=callgrind
+//! --toggle-collect='*intersect_many::time*'`).
+
+mod common;
+
+use glam::{Vec2, Vec3A};
+use mcrt::geometry::Ray;
+use mcrt::scene::{Interaction, Scene};
+use std::path::Path;
+use std::time::Instant;
+
+const RES: u32 = 64;
+const SPP: u32 = 4;
+const BOUNCES: usize = 3;
+
+/// A 64-bit hash (SplitMix64's finaliser) as a number in [0, 1).
+fn unit(seed: u64) -> f32 {
+    let mut z = seed.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+}
+
+/// The rays of each depth: the camera's, then each bounce's; and shadow rays with their
+/// distances, one from each hit towards a point drawn uniformly in the scene's bounds (as
+/// a light sample's, the segment's end not reached: 1 − 10⁻⁴).
+fn path_rays(scene: &Scene) -> (Vec<Vec<Ray>>, Vec<Ray>, Vec<f32>) {
+    let cam = scene.camera(None).expect("a camera").build(RES, RES);
+    let mut levels = vec![Vec::new()];
+    let (mut shadow, mut shadow_t) = (Vec::new(), Vec::new());
+    let bb = scene.bounds().expect("a scene with something in it");
+    for y in 0..RES {
+        for x in 0..RES {
+            for s in 0..SPP {
+                let id = (((y * RES + x) * SPP + s) as u64) << 8;
+                levels[0].push(cam.generate_ray(x, y, Vec2::new(unit(id), unit(id + 1))));
+            }
+        }
+    }
+    for depth in 0..BOUNCES {
+        let mut next = Vec::new();
+        for (k, ray) in levels[depth].iter().enumerate() {
+            let Some(si) = scene.intersect(ray) else {
+                continue;
+            };
+            let id = ((k as u64) << 8) + 2 + 2 * depth as u64;
+            let (u1, u2) = (unit(id), unit(id + 1));
+            let n = if si.ns.dot(ray.d) > 0.0 {
+                -si.ns
+            } else {
+                si.ns
+            };
+            let (a, b) = n.any_orthonormal_pair();
+            let (r, phi) = (u1.sqrt(), std::f32::consts::TAU * u2);
+            let d = a * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt();
+            next.push(si.spawn_ray(d));
+            let u = Vec3A::new(unit(id + 100), unit(id + 101), unit(id + 102));
+            shadow.push(si.spawn_ray(bb.min + (bb.max - bb.min) * u - si.p));
+            shadow_t.push(1.0 - 1e-4);
+        }
+        levels.push(next);
+    }
+    (levels, shadow, shadow_t)
+}
+
+/// All fields of an answer, as bits.
+fn bits(h: &Option<Interaction>) -> Option<Vec<u32>> {
+    h.as_ref().map(|s| {
+        let mut b = Vec::new();
+        for v in [s.p, s.p_err, s.ng, s.ns, s.ns_base] {
+            b.extend(v.to_array().map(f32::to_bits));
+        }
+        b.extend([
+            s.t.to_bits(),
+            s.uv.x.to_bits(),
+            s.uv.y.to_bits(),
+            s.material,
+            s.light,
+        ]);
+        b
+    })
+}
+
+type Trace = fn(&Scene, &[Ray], &mut [Option<Interaction>]);
+
+fn one_by_one(s: &Scene, rays: &[Ray], out: &mut [Option<Interaction>]) {
+    for (r, o) in rays.iter().zip(out) {
+        *o = s.intersect(r);
+    }
+}
+
+const VARIANTS: [(&str, Trace); 5] = [
+    ("1", one_by_one),
+    ("4", |s, r, o| s.intersect_many_k::<4>(r, o)),
+    ("8", |s, r, o| s.intersect_many_k::<8>(r, o)),
+    ("16", |s, r, o| s.intersect_many_k::<16>(r, o)),
+    ("32", |s, r, o| s.intersect_many_k::<32>(r, o)),
+];
+
+/// Seconds to trace `rays` in batches of `batch` with `f` (not inlined, for callgrind's
+/// `--toggle-collect='*intersect_many::time*'`).
+#[inline(never)]
+fn time(
+    scene: &Scene,
+    rays: &[Ray],
+    batch: usize,
+    f: Trace,
+    out: &mut [Option<Interaction>],
+) -> f64 {
+    let t = Instant::now();
+    for (r, o) in rays.chunks(batch).zip(out.chunks_mut(batch)) {
+        f(scene, r, o);
+    }
+    std::hint::black_box(&out);
+    t.elapsed().as_secs_f64()
+}
+
+fn main() {
+    let mut scenes = Vec::new();
+    let (mut batch, mut rounds) = (256usize, 7usize);
+    // `--only NAME`: that variant once, no checks (for `valgrind --tool=callgrind`).
+    let mut only = None;
+    let mut args = std::env::args().skip(1);
+    while let Some(a) = args.next() {
+        match a.as_str() {
+            "--batch" => batch = args.next().and_then(|v| v.parse().ok()).expect("--batch N"),
+            "--rounds" => {
+                rounds = args
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .expect("--rounds N")
+            }
+            "--only" => only = Some(args.next().expect("--only VARIANT")),
+            "--bunny" => scenes.push(format!("bunny:{}", args.next().expect("--bunny N"))),
+            "--bench" => {}
+            _ => scenes.push(a),
+        }
+    }
+    if scenes.is_empty() {
+        scenes = ["gallery", "bunny-box"]
+            .map(|s| format!("{}/bench/out/scenes/{s}.xml", env!("CARGO_MANIFEST_DIR")))
+            .to_vec();
+    }
+    for path in &scenes {
+        let desc = match path.strip_prefix("bunny:") {
+            // The benchmarks' bunny, each triangle split into N² (`--bunny N`).
+            Some(n) => common::bunny_scene(common::subdivide(
+                &common::bunny(),
+                n.parse().expect("--bunny N"),
+            )),
+            None => mcrt::load_scene_with(Path::new(path), &mcrt::LoadOptions::default())
+                .unwrap_or_else(|e| panic!("{path}: {e} (run python3 bench/make_scenes.py)")),
+        };
+        let scene = Scene::build(desc);
+        let (levels, shadow, shadow_t) = path_rays(&scene);
+        let sets = [
+            ("camera", levels[0].clone()),
+            ("bounces", levels[1..].concat()),
+        ];
+        println!(
+            "{path}: {} triangles, {:.1} MB, streams: {}, batches of {batch}, {rounds} rounds",
+            scene.triangle_count(),
+            scene.memory_bytes() as f64 / 1e6,
+            scene.streams()
+        );
+        for (name, rays) in &sets {
+            if let Some(v) = &only {
+                let f = VARIANTS
+                    .iter()
+                    .find(|(n, _)| n == v)
+                    .expect("a variant's name")
+                    .1;
+                let mut out = vec![None; rays.len()];
+                let t = time(&scene, rays, batch, f, &mut out);
+                println!(
+                    "  {name}: {} rays, {v}: {:.1} ns/ray",
+                    rays.len(),
+                    t * 1e9 / rays.len() as f64
+                );
+                continue;
+            }
+            let mut want = vec![None; rays.len()];
+            one_by_one(&scene, rays, &mut want);
+            let want: Vec<_> = want.iter().map(bits).collect();
+            let mut out = vec![None; rays.len()];
+            for (vname, f) in &VARIANTS[1..] {
+                time(&scene, rays, batch, *f, &mut out);
+                let got: Vec<_> = out.iter().map(bits).collect();
+                assert!(got == want, "{vname}: answers differ from one by one");
+            }
+            let mut best = vec![f64::INFINITY; VARIANTS.len()];
+            let mut worst = vec![0f64; VARIANTS.len()];
+            for round in 0..rounds {
+                for j in 0..VARIANTS.len() {
+                    let v = (j + round) % VARIANTS.len();
+                    let t = time(&scene, rays, batch, VARIANTS[v].1, &mut out);
+                    best[v] = best[v].min(t);
+                    worst[v] = worst[v].max(t);
+                }
+            }
+            println!("  {name}: {} rays", rays.len());
+            for (v, (vname, _)) in VARIANTS.iter().enumerate() {
+                println!(
+                    "    K = {vname:>2}: {:7.1} ns/ray (spread {:.2}), one by one / this {:.3}",
+                    best[v] * 1e9 / rays.len() as f64,
+                    worst[v] / best[v],
+                    best[0] / best[v],
+                );
+            }
+        }
+        shadows(&scene, &shadow, &shadow_t, batch, rounds, only.as_deref());
+    }
+}
+
+type Occlusion = fn(&Scene, &[Ray], &[f32], &mut [bool]);
+
+fn occluded_one_by_one(s: &Scene, rays: &[Ray], t: &[f32], out: &mut [bool]) {
+    for ((r, &t), o) in rays.iter().zip(t).zip(out) {
+        *o = s.occluded(r, t);
+    }
+}
+
+const SHADOW_VARIANTS: [(&str, Occlusion); 5] = [
+    ("1", occluded_one_by_one),
+    ("4", |s, r, t, o| s.occluded_many_k::<4>(r, t, o)),
+    ("8", |s, r, t, o| s.occluded_many_k::<8>(r, t, o)),
+    ("16", |s, r, t, o| s.occluded_many_k::<16>(r, t, o)),
+    ("32", |s, r, t, o| s.occluded_many_k::<32>(r, t, o)),
+];
+
+/// Seconds to trace shadow rays in batches of `batch` with `f`.
+#[inline(never)]
+fn time_shadows(scene: &Scene, rays: &[Ray], t: &[f32], batch: usize, f: Occlusion) -> f64 {
+    let mut out = vec![false; rays.len()];
+    let start = Instant::now();
+    for ((r, t), o) in rays
+        .chunks(batch)
+        .zip(t.chunks(batch))
+        .zip(out.chunks_mut(batch))
+    {
+        f(scene, r, t, o);
+    }
+    std::hint::black_box(&out);
+    start.elapsed().as_secs_f64()
+}
+
+/// The shadow rays one by one against `occluded_many_k` (answers checked equal first).
+fn shadows(
+    scene: &Scene,
+    rays: &[Ray],
+    t: &[f32],
+    batch: usize,
+    rounds: usize,
+    only: Option<&str>,
+) {
+    if let Some(v) = only {
+        let f = SHADOW_VARIANTS
+            .iter()
+            .find(|(n, _)| *n == v)
+            .expect("a variant")
+            .1;
+        let s = time_shadows(scene, rays, t, batch, f);
+        println!(
+            "  shadow: {} rays, {v}: {:.1} ns/ray",
+            rays.len(),
+            s * 1e9 / rays.len() as f64
+        );
+        return;
+    }
+    let mut want = vec![false; rays.len()];
+    occluded_one_by_one(scene, rays, t, &mut want);
+    for (vname, f) in &SHADOW_VARIANTS[1..] {
+        let mut out = vec![false; rays.len()];
+        f(scene, rays, t, &mut out);
+        assert!(
+            out == want,
+            "shadow rays, {vname}: answers differ from one by one"
+        );
+    }
+    let mut best = [f64::INFINITY; SHADOW_VARIANTS.len()];
+    let mut worst = [0f64; SHADOW_VARIANTS.len()];
+    for round in 0..rounds {
+        for j in 0..SHADOW_VARIANTS.len() {
+            let v = (j + round) % SHADOW_VARIANTS.len();
+            let s = time_shadows(scene, rays, t, batch, SHADOW_VARIANTS[v].1);
+            best[v] = best[v].min(s);
+            worst[v] = worst[v].max(s);
+        }
+    }
+    let blocked = want.iter().filter(|&&b| b).count();
+    println!("  shadow: {} rays ({blocked} blocked)", rays.len());
+    for (v, (vname, _)) in SHADOW_VARIANTS.iter().enumerate() {
+        println!(
+            "    K = {vname:>2}: {:7.1} ns/ray (spread {:.2}), one by one / this {:.3}",
+            best[v] * 1e9 / rays.len() as f64,
+            worst[v] / best[v],
+            best[0] / best[v],
+        );
+    }
+}

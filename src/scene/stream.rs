@@ -1,0 +1,173 @@
+//! Closest hits of a batch of independent rays ([`Scene::intersect_many`]), their BVH
+//! traversals interleaved so that their cache misses overlap
+//! ([`crate::accel::WideBvh::intersect_stream`]).
+//!
+//! Every answer is the same bits as [`Scene::intersect`]'s: each ray's traversal repeats the
+//! same step function with the same primitive test (`Scene::keep_nearer`, the tie rule
+//! included), and its hit becomes an [`Interaction`] by the same code. Scenes small enough for
+//! brute force ([`crate::accel::flat`]) trace their rays one by one: their few primitives sit
+//! in the L1 cache, with no miss to hide. With instances, the scene's own primitives are
+//! traversed together and the instances (the top-level tree and the groups' trees) one ray at
+//! a time.
+
+use super::{Interaction, Scene, NO_HIT};
+use crate::accel::prefetch;
+use crate::geometry::Ray;
+
+/// Rays in flight in [`Scene::intersect_many`] (see docs/performance.md for the
+/// measurement that chose it).
+pub const STREAM: usize = 8;
+
+/// Bytes of the CPU's level-2 cache (of the first CPU, as Linux reports it), 1 MiB where it
+/// is not known.
+fn l2_bytes() -> usize {
+    static L2: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
+    *L2.get_or_init(|| {
+        let dir = std::path::Path::new("/sys/devices/system/cpu/cpu0/cache");
+        let read = |i: usize, f: &str| std::fs::read_to_string(dir.join(format!("index{i}/{f}")));
+        (0..8)
+            .filter(|&i| read(i, "level").is_ok_and(|l| l.trim() == "2"))
+            .find_map(|i| {
+                let size = read(i, "size").ok()?;
+                let kib: usize = size.trim().strip_suffix('K')?.parse().ok()?;
+                Some(kib << 10)
+            })
+            .unwrap_or(1 << 20)
+    })
+}
+
+impl Scene {
+    /// Whether [`Scene::intersect_many`] interleaves its rays: where what a traversal reads
+    /// (the tree's nodes, the primitives' vertex indices and positions) exceeds the level-2
+    /// cache, so that node loads miss it. Where it fits, there is no miss to hide, and the
+    /// interleaving's cost (about a quarter more instructions, and branches that the
+    /// predictor sees mixed from several rays) made it slower: see docs/performance.md.
+    pub fn streams(&self) -> bool {
+        use std::mem::size_of_val;
+        let bytes = self.bvh.memory_bytes()
+            + size_of_val(&self.tris[..])
+            + size_of_val(&self.positions[..]);
+        bytes > l2_bytes()
+    }
+
+    /// [`Scene::intersect_many`] with `K` rays in flight (`K` ≤ 1: one by one), for the
+    /// tests and benchmarks, which compare the choices.
+    #[doc(hidden)]
+    pub fn intersect_many_k<const K: usize>(&self, rays: &[Ray], out: &mut [Option<Interaction>]) {
+        assert_eq!(rays.len(), out.len(), "one output per ray");
+        if K <= 1 || self.is_flat() {
+            for (ray, o) in rays.iter().zip(out.iter_mut()) {
+                *o = self.intersect(ray);
+            }
+            return;
+        }
+        let done = |k: usize, found: bool, best: &(usize, f32, f32, f32)| {
+            let ray = &rays[k];
+            let hit = found.then_some(*best);
+            out[k] = match &self.instances {
+                Some(inst) => inst.intersect(self, ray, hit),
+                None => hit.map(|(i, u, v, t)| self.interaction(ray, i, u, v, t)),
+            };
+        };
+        if self.masked {
+            self.closest_stream::<K>(rays, |ray, i, u, v, t| self.seen(ray, i, u, v, t), done);
+        } else {
+            self.closest_stream::<K>(rays, |_, _, _, _, _| true, done);
+        }
+    }
+
+    /// `Scene::closest_kept` of each ray up to infinity, `K` in flight; `done(k, found,
+    /// best)` gets each ray's answer as its traversal ends.
+    #[inline(always)]
+    fn closest_stream<const K: usize>(
+        &self,
+        rays: &[Ray],
+        keep: impl Fn(&Ray, usize, f32, f32, f32) -> bool,
+        done: impl FnMut(usize, bool, &(usize, f32, f32, f32)),
+    ) {
+        self.bvh.intersect_stream::<K, _>(
+            rays,
+            f32::INFINITY,
+            NO_HIT,
+            #[inline(always)]
+            |k, best, i, t_max| {
+                let ray = &rays[k];
+                self.keep_nearer(ray, best, i, t_max, &|i, u, v, t| keep(ray, i, u, v, t))
+            },
+            #[inline(always)]
+            |first, count| self.prefetch_prims(first, count),
+            done,
+        );
+    }
+
+    /// Occlusion of several rays: `out[k]` is [`Scene::occluded`]`(&rays[k], t_max[k])`,
+    /// their traversals interleaved as [`Scene::intersect_many`]'s are. Panics if the slices'
+    /// lengths differ.
+    pub fn occluded_many(&self, rays: &[Ray], t_max: &[f32], out: &mut [bool]) {
+        if self.streams() {
+            self.occluded_many_k::<STREAM>(rays, t_max, out);
+        } else {
+            self.occluded_many_k::<1>(rays, t_max, out);
+        }
+    }
+
+    /// [`Scene::occluded_many`] with `K` rays in flight (`K` ≤ 1: one by one), for the tests
+    /// and benchmarks.
+    #[doc(hidden)]
+    pub fn occluded_many_k<const K: usize>(&self, rays: &[Ray], t_max: &[f32], out: &mut [bool]) {
+        assert!(
+            rays.len() == t_max.len() && rays.len() == out.len(),
+            "one distance and one output per ray"
+        );
+        if K <= 1 || self.is_flat() {
+            for ((ray, &t), o) in rays.iter().zip(t_max).zip(out.iter_mut()) {
+                *o = self.occluded(ray, t);
+            }
+            return;
+        }
+        let done = |k: usize, blocked: bool| {
+            out[k] = blocked
+                || (self.instances.as_ref()).is_some_and(|inst| inst.occluded(&rays[k], t_max[k]));
+        };
+        let leaf = |first, count| self.prefetch_prims(first, count);
+        if self.masked {
+            self.bvh.occluded_stream::<K>(
+                rays,
+                t_max,
+                |k, i, t| {
+                    let ray = &rays[k];
+                    self.hit(ray, i, t)
+                        .is_some_and(|(t, u, v)| self.seen(ray, i, u, v, t))
+                },
+                leaf,
+                done,
+            );
+        } else {
+            self.bvh.occluded_stream::<K>(
+                rays,
+                t_max,
+                #[inline(always)]
+                |k, i, t| self.hit(&rays[k], i, t).is_some(),
+                leaf,
+                done,
+            );
+        }
+    }
+
+    /// Prefetches the vertex indices of primitives `first..first + count` (BVH order), what
+    /// a leaf's tests read first.
+    #[inline(always)]
+    fn prefetch_prims(&self, first: usize, count: usize) {
+        let prims = &self.tris[first..first + count];
+        let p = prims.as_ptr() as *const u8;
+        let len = std::mem::size_of_val(prims);
+        let mut off = 0;
+        while off < len {
+            // SAFETY: `off` < `len`: inside the slice.
+            prefetch(unsafe { &*p.add(off) });
+            off += 64;
+        }
+        // SAFETY: a leaf holds at least one primitive, so `len` > 0.
+        prefetch(unsafe { &*p.add(len - 1) });
+    }
+}
