@@ -121,28 +121,16 @@ fn one_sample(
     delta: [f32; 3],
     stats: &mut RayStats,
 ) -> Color {
-    match one_shadow_ray(scene, si, frame, wo, material, delta, stats) {
-        Some((ray, t_max, contribution)) if !scene.occluded(&ray, t_max) => contribution,
-        _ => Color::ZERO,
-    }
-}
-
-/// [`one_sample`] up to its shadow ray (counted): the ray, the distance it must be clear to
-/// and the contribution if it is; None where the sample contributes nothing. The stream
-/// traces the rays of many vertices together ([`super::stream`]).
-#[inline(always)]
-pub(crate) fn one_shadow_ray(
-    scene: &Scene,
-    si: &Interaction,
-    frame: &Frame,
-    wo: Vec3A,
-    material: &Material,
-    delta: [f32; 3],
-    stats: &mut RayStats,
-) -> Option<(Ray, f32, Color)> {
-    let sample = light_sample(scene, si, frame, wo, material, 1, delta)?;
+    let Some((ray, t_max, contribution)) = light_sample(scene, si, frame, wo, material, 1, delta)
+    else {
+        return Color::ZERO;
+    };
     stats.shadow_rays += 1;
-    Some(sample)
+    if scene.occluded(&ray, t_max) {
+        Color::ZERO
+    } else {
+        contribution
+    }
 }
 
 /// Light sample `u` (two numbers for the point, one for the light) of `n` at `si`: its

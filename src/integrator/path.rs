@@ -1,9 +1,7 @@
 //! Path tracing with next-event estimation, MIS and Russian roulette (Kajiya 1986; Veach 1997
 //! ch. 9; the structure follows pbrt-v4's `PathIntegrator` and Mitsuba 3's `path`).
 
-use super::{
-    emitted, escaped, one_shadow_ray, sample_lights, IntegratorParams, RayStats, RussianRoulette,
-};
+use super::{emitted, escaped, sample_lights, IntegratorParams, RayStats, RussianRoulette};
 use crate::camera::Camera;
 use crate::film::PixelSums;
 use crate::geometry::{Frame, Ray};
@@ -148,23 +146,6 @@ impl PathState {
         p: &IntegratorParams,
         stats: &mut RayStats,
     ) -> bool {
-        self.advance::<false>(scene, hit, sampler, p, stats, &mut Shadow::None)
-    }
-
-    /// [`PathState::step`], but with `DEFER` and one shadow ray a vertex (the default) the
-    /// next-event estimate's shadow ray is left in `shadow` for the caller to trace; its
-    /// [`Shadow::resolve`] must then add it to `self.l` before the next step, which makes
-    /// the same sums in the same order.
-    #[inline(always)]
-    pub fn advance<const DEFER: bool>(
-        &mut self,
-        scene: &Scene,
-        hit: Option<&Interaction>,
-        sampler: &mut Sampler,
-        p: &IntegratorParams,
-        stats: &mut RayStats,
-        shadow: &mut Shadow,
-    ) -> bool {
         stats.rays += 1;
         let ray = self.ray;
         let hidden = self.depth == 0 && p.hide_emitters;
@@ -187,20 +168,7 @@ impl PathState {
         }
         let frame = Frame::from_normal(si.ns);
         let wo = frame.to_local(-ray.d);
-        if DEFER && p.shadow_rays == 1 && !material.is_specular() && !scene.lights.is_empty() {
-            // What `sample_lights` does with one sample, short of its shadow ray.
-            let delta = sampler.next_3d();
-            let beta = self.beta;
-            *shadow = match one_shadow_ray(scene, si, &frame, wo, material, delta, stats) {
-                Some((ray, t_max, contribution)) => Shadow::Ray {
-                    ray,
-                    t_max,
-                    beta,
-                    contribution,
-                },
-                None => Shadow::Zero { beta },
-            };
-        } else if !material.is_specular() && !scene.lights.is_empty() {
+        if !material.is_specular() && !scene.lights.is_empty() {
             self.l += self.beta
                 * sample_lights(
                     scene,
@@ -248,46 +216,5 @@ impl PathState {
             }
         }
         self.beta != Color::ZERO
-    }
-}
-
-/// A vertex's next-event estimate waiting for its shadow ray ([`PathState::advance`]).
-#[derive(Clone, Copy, Debug, Default)]
-pub enum Shadow {
-    /// Nothing to add.
-    #[default]
-    None,
-    /// Add throughput × `contribution` if `ray` is clear up to `t_max`, else throughput × 0.
-    Ray {
-        ray: Ray,
-        t_max: f32,
-        beta: Color,
-        contribution: Color,
-    },
-    /// Add throughput × 0: the light sample contributes nothing (as `sample_lights` adds it).
-    Zero { beta: Color },
-}
-
-impl Shadow {
-    /// The shadow ray to trace and the distance it must be clear to, if any.
-    #[inline(always)]
-    pub fn ray(&self) -> Option<(&Ray, f32)> {
-        match self {
-            Shadow::Ray { ray, t_max, .. } => Some((ray, *t_max)),
-            _ => None,
-        }
-    }
-
-    /// Adds the estimate to the path's radiance `l`, given whether the shadow ray (if any)
-    /// found something in the way: `l + β·c` or `l + β·0`, the operations `step` does.
-    #[inline(always)]
-    pub fn resolve(self, l: &mut Color, occluded: bool) {
-        match self {
-            Shadow::None => {}
-            Shadow::Ray {
-                beta, contribution, ..
-            } => *l += beta * if occluded { Color::ZERO } else { contribution },
-            Shadow::Zero { beta } => *l += beta * Color::ZERO,
-        }
     }
 }

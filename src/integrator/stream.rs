@@ -15,13 +15,10 @@
 //! traversal's dependent loads at a time: the argument of Laine, Karras and Aila, "Megakernels
 //! Considered Harmful: Wavefront Path Tracing on GPUs" (HPG 2013), for splitting the path
 //! loop into a trace stage and a shade stage over queues of paths, as pbrt-v4's wavefront
-//! integrator does (`src/pbrt/wavefront/`). The shadow ray of a vertex's light sample (one a
-//! vertex, the default) is traced likewise, after the vertices of the round, and its
-//! estimate added to its path before the path's next vertex ([`PathState::advance`]), so
-//! in the same order as the one-path loop adds it; several shadow rays a vertex are traced
-//! inside the step, as one packet ([`super::nee`]).
+//! integrator does (`src/pbrt/wavefront/`). Next-event estimation stays inside the step (its
+//! shadow rays of a vertex are traced as one packet, [`super::nee`]).
 
-use super::path::{PathState, Shadow};
+use super::path::PathState;
 use super::{IntegratorParams, RayStats};
 use crate::camera::Camera;
 use crate::film::PixelSums;
@@ -40,10 +37,6 @@ struct Slot {
     path: PathState,
     sampler: Sampler,
     k: usize,
-    /// Its last vertex's next-event estimate, until its shadow ray is traced.
-    shadow: Shadow,
-    /// Whether the path goes on after its last vertex.
-    alive: bool,
 }
 
 /// The tile's camera samples, pixel by pixel, each pixel's in index order.
@@ -127,39 +120,14 @@ fn render_tile_portable(
     }
     let mut rays: Vec<Ray> = Vec::with_capacity(POOL);
     let mut hits: Vec<Option<Interaction>> = vec![None; POOL];
-    let mut shadow_rays: Vec<(Ray, f32)> = Vec::with_capacity(POOL);
-    let mut occluded: Vec<bool> = Vec::with_capacity(POOL);
     while !pool.is_empty() {
-        // Trace: the closest hits of the live paths' rays.
         rays.clear();
         rays.extend(pool.iter().map(|slot| slot.path.ray));
         let hits = &mut hits[..pool.len()];
         scene.intersect_many(&rays, hits);
-        // Shade: a vertex of each path, its shadow ray (one light sample) left for later.
-        for (slot, hit) in pool.iter_mut().zip(hits) {
-            slot.alive = step(scene, slot, hit.as_ref(), p, &mut stats.rays);
-        }
-        // The shadow rays of all the vertices, then each estimate added to its path.
-        shadow_rays.clear();
-        shadow_rays.extend(
-            pool.iter()
-                .filter_map(|slot| slot.shadow.ray())
-                .map(|(r, t)| (*r, t)),
-        );
-        occluded.clear();
-        occluded.extend(
-            shadow_rays
-                .iter()
-                .map(|(ray, t_max)| scene.occluded(ray, *t_max)),
-        );
-        let mut occluded = occluded.iter();
         let mut live = pool.len();
-        for slot in pool.iter_mut() {
-            let shadow = std::mem::take(&mut slot.shadow);
-            let blocked =
-                shadow.ray().is_some() && *occluded.next().expect("an answer for each shadow ray");
-            shadow.resolve(&mut slot.path.l, blocked);
-            if slot.alive {
+        for (slot, hit) in pool.iter_mut().zip(hits) {
+            if step(scene, slot, hit.as_ref(), p, &mut stats.rays) {
                 continue;
             }
             render::add_sample(&mut sums[slot.k], &pixels[slot.k], slot.path.l, stats);
@@ -187,8 +155,7 @@ fn step(
     p: &IntegratorParams,
     stats: &mut RayStats,
 ) -> bool {
-    let (path, sampler) = (&mut slot.path, &mut slot.sampler);
-    path.advance::<true>(scene, hit, sampler, p, stats, &mut slot.shadow)
+    slot.path.step(scene, hit, &mut slot.sampler, p, stats)
 }
 
 /// The queue's next camera sample as a path (camera samples of a path that traces no
@@ -205,15 +172,7 @@ fn start(
         let (k, i) = queue.next()?;
         let (sampler, ray) = render::camera_sample(s, camera, &queue.pixels[k], i);
         match PathState::new(ray, &s.params) {
-            Some(path) => {
-                return Some(Slot {
-                    path,
-                    sampler,
-                    k,
-                    shadow: Shadow::None,
-                    alive: true,
-                })
-            }
+            Some(path) => return Some(Slot { path, sampler, k }),
             None => render::add_sample(&mut sums[k], &queue.pixels[k], crate::Color::ZERO, stats),
         }
     }
