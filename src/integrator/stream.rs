@@ -27,9 +27,10 @@ use crate::render::{self, RenderSettings, RenderStats, TilePixel};
 use crate::sampler::Sampler;
 use crate::scene::{Interaction, Scene};
 
-/// Paths in flight per tile (and rays per [`Scene::intersect_many`] call). Measured on the
-/// gallery and bunny-box scenes (docs/performance.md).
-pub const POOL: usize = 64;
+/// Paths in flight per tile (and rays per [`Scene::intersect_many`] call). With interleaved
+/// traversal, 256 and 512 rendered the gallery fastest (16 and 64 less so); with one ray
+/// after another, the size makes no difference (docs/performance.md).
+pub const POOL: usize = 256;
 
 /// A path in flight: its state, its camera sample's random numbers and its pixel (index
 /// into the tile's pixels).
