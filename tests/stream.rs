@@ -8,6 +8,9 @@
 //! unlimited; both roulettes; several shadow rays; both samplers — on one and two threads, in
 //! crops and in passes.
 
+mod common;
+
+use common::cli::{TempDir, BIN};
 use mcrt::film::{Film, PixelSums};
 use mcrt::integrator::{prepare, IntegratorKind};
 use mcrt::render::{render, render_samples, Backend, RenderSettings, RenderStats, TilePixel};
@@ -304,4 +307,73 @@ fn other_integrators_refuse_it() {
             .unwrap_or_else(|| panic!("{kind:?} takes --backend stream"));
         assert!(e.to_string().contains("--backend stream"), "{e}");
     }
+}
+
+/// From the command line: a render checkpointed at 3 spp and resumed to 7 with
+/// `--backend stream` (a thin-lens camera, so `auto` takes the stream too) gives the image of
+/// one scalar render at 7 spp, bit for bit.
+#[test]
+fn checkpoint_and_resume_from_the_command_line() {
+    let dir = TempDir::new("stream-resume");
+    let scene =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mitsuba/features/cameras.xml");
+    let render = |out: &Path, extra: &[&str]| {
+        let o = std::process::Command::new(BIN)
+            .arg("render")
+            .arg(&scene)
+            .arg("-o")
+            .arg(out)
+            .args([
+                "--width",
+                "19",
+                "--height",
+                "11",
+                "--threads",
+                "2",
+                "--seed",
+                "3",
+                "-q",
+            ])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        mcrt::image::read_exr(out).unwrap()
+    };
+    let ckpt = dir.path().join("state.exr");
+    let ckpt_arg = ckpt.to_str().unwrap();
+    let first = dir.path().join("first.exr");
+    render(
+        &first,
+        &[
+            "--spp",
+            "3",
+            "--backend",
+            "stream",
+            "--checkpoint",
+            ckpt_arg,
+        ],
+    );
+    let resumed = render(
+        &dir.path().join("resumed.exr"),
+        &["--spp", "7", "--backend", "stream", "--resume", ckpt_arg],
+    );
+    let once = render(
+        &dir.path().join("once.exr"),
+        &["--spp", "7", "--backend", "scalar"],
+    );
+    let bits = |img: &mcrt::image::Image| -> Vec<[u32; 3]> {
+        img.pixels
+            .iter()
+            .map(|p| p.to_array().map(f32::to_bits))
+            .collect()
+    };
+    assert!(
+        bits(&resumed) == bits(&once),
+        "resumed stream differs from one scalar render"
+    );
+    assert!(
+        once.pixels.iter().any(|p| p.max_element() > 0.0),
+        "a black image"
+    );
 }
