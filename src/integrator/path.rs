@@ -76,6 +76,9 @@ impl super::Integrator for PathTracer<'_> {
     }
 }
 
+/// Radiance along a camera ray, one path at a time: the loop "intersect, step" over
+/// [`PathState::step`], which holds all of the path's maths (the stream, [`super::stream`],
+/// runs the same function for many paths at a time).
 #[inline(always)]
 pub fn li(
     scene: &Scene,
