@@ -205,9 +205,9 @@ struct RenderArgs {
     #[arg(long)]
     camera: Option<String>,
     /// How the path tracer runs: auto (the fastest the CPU and scene allow), scalar (one path
-    /// at a time), avx512 or avx2 (sixteen at a time; refused where unavailable). The image
-    /// does not depend on it.
-    #[arg(long, value_name = "auto|scalar|avx512|avx2", value_parser = parse_backend)]
+    /// at a time), stream (a pool of paths per tile, rays traced in batches), avx512 or avx2
+    /// (sixteen at a time; refused where unavailable). The image does not depend on it.
+    #[arg(long, value_name = "auto|scalar|stream|avx512|avx2", value_parser = parse_backend)]
     backend: Option<mcrt::render::Backend>,
     #[command(flatten)]
     image: ImageArgs,
@@ -721,7 +721,7 @@ fn print_photon_stats(stats: &mcrt::render::RenderStats) {
 
 fn parse_backend(s: &str) -> Result<mcrt::render::Backend, String> {
     mcrt::render::Backend::parse(s)
-        .ok_or_else(|| format!("expected auto, scalar, avx512 or avx2, got '{s}'"))
+        .ok_or_else(|| format!("expected auto, scalar, stream, avx512 or avx2, got '{s}'"))
 }
 
 fn warn_dropped(stats: &mcrt::render::RenderStats) {

@@ -36,7 +36,8 @@ pub struct RenderSettings {
 /// settings: a render may be resumed on another machine with another backend.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Backend {
-    /// The fastest that the CPU, the scene and the integrator allow.
+    /// The fastest that the CPU, the scene and the integrator allow: the wavefront where it
+    /// takes the scene and camera, else the stream.
     #[default]
     Auto,
     /// One path at a time.
@@ -46,6 +47,9 @@ pub enum Backend {
     Avx512,
     /// Sixteen paths at a time in two AVX2 registers; refused likewise.
     Avx2,
+    /// A pool of paths per tile whose rays are traced in batches
+    /// ([`crate::integrator::stream`]): any scene, camera and CPU.
+    Stream,
 }
 
 impl Backend {
@@ -55,6 +59,7 @@ impl Backend {
             "scalar" => Backend::Scalar,
             "avx512" => Backend::Avx512,
             "avx2" => Backend::Avx2,
+            "stream" => Backend::Stream,
             _ => return None,
         })
     }
@@ -65,6 +70,7 @@ impl Backend {
             Backend::Scalar => "scalar",
             Backend::Avx512 => "avx512",
             Backend::Avx2 => "avx2",
+            Backend::Stream => "stream",
         }
     }
 }
@@ -199,19 +205,46 @@ fn render_tile(
         return;
     }
     for (p, px) in pixels.iter().zip(sums) {
-        // Random numbers follow the pixel of the full image, so a crop renders the same
-        // values as the whole image does there.
-        let pixel = p.gy as u64 * s.width as u64 + p.gx as u64;
         for i in p.samples.0..p.samples.1 {
-            let mut sampler = Sampler::for_sample(s.sampler, s.seed, pixel, i as u64);
-            let ray = camera.sample_ray(p.gx, p.gy, &mut sampler);
+            let (mut sampler, ray) = camera_sample(s, camera, p, i);
             let l = integrator.li(ray, &mut sampler, &mut stats.rays);
-            if l.is_finite() {
-                px.add(l);
-            } else {
-                stats.dropped += 1;
-                stats.first_dropped.get_or_insert((p.x, p.y));
-            }
+            add_sample(px, p, l, stats);
+        }
+    }
+}
+
+/// Camera sample `i` of pixel `p`: its random numbers and its ray (what every way of
+/// rendering a tile starts a sample with).
+#[inline(always)]
+pub(crate) fn camera_sample(
+    s: &RenderSettings,
+    camera: &crate::camera::Camera,
+    p: &TilePixel,
+    i: u32,
+) -> (Sampler, crate::geometry::Ray) {
+    // Random numbers follow the pixel of the full image, so a crop renders the same
+    // values as the whole image does there.
+    let pixel = p.gy as u64 * s.width as u64 + p.gx as u64;
+    let mut sampler = Sampler::for_sample(s.sampler, s.seed, pixel, i as u64);
+    let ray = camera.sample_ray(p.gx, p.gy, &mut sampler);
+    (sampler, ray)
+}
+
+/// Adds a sample's value `l` to its pixel's sums, or drops it if it is not finite (counted,
+/// with the first such pixel in scan order, whatever order the samples came in).
+#[inline]
+pub(crate) fn add_sample(
+    px: &mut PixelSums,
+    p: &TilePixel,
+    l: crate::Color,
+    stats: &mut RenderStats,
+) {
+    if l.is_finite() {
+        px.add(l);
+    } else {
+        stats.dropped += 1;
+        if stats.first_dropped.is_none_or(|q| (p.y, p.x) < (q.1, q.0)) {
+            stats.first_dropped = Some((p.x, p.y));
         }
     }
 }

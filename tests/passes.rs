@@ -459,6 +459,14 @@ fn backend_is_a_render_setting() {
         "scalar",
     );
     assert!(bits(&read_exr(&auto).unwrap()) == bits(&read_exr(&scalar).unwrap()));
+    let stream = dir.path().join("stream.exr");
+    ok(
+        &render_cmd(&stream, 4, &["--backend", "stream"])
+            .output()
+            .unwrap(),
+        "stream",
+    );
+    assert!(bits(&read_exr(&stream).unwrap()) == bits(&read_exr(&scalar).unwrap()));
     // Direct lighting runs one path at a time: a wide backend is refused for it.
     let out = dir.path().join("refused.exr");
     let o = render_cmd(&out, 4, &["--backend", "avx2", "--integrator", "direct"])

@@ -9,6 +9,13 @@
 //! - [`sppm`]: stochastic progressive photon mapping (Hachisuka and Jensen 2009), its own
 //!   whole-image driver ([`sppm::render_sppm`]).
 //!
+//! The path tracer's maths is one function, [`path::PathState::step`] (one vertex of one
+//! path), which two drivers run: [`path::li`] one path at a time (`--backend scalar`) and
+//! [`stream`], a pool of paths per tile whose rays are traced in batches (any scene). The
+//! sixteen-lane [`wavefront`] follows it lane for lane on the small scenes it takes. The
+//! render settings' backend chooses ([`crate::render::Backend`]); the image is the same bits
+//! with each.
+//!
 //! # The seam
 //!
 //! The render loop ([`crate::render`]), the progressive driver, `--pass`, `--resume` and
@@ -27,6 +34,7 @@ mod nee;
 pub mod path;
 pub mod photon;
 pub mod sppm;
+pub mod stream;
 #[cfg(target_arch = "x86_64")]
 pub mod wavefront;
 
@@ -294,16 +302,22 @@ pub fn li(
     stats: &mut RayStats,
 ) -> Color {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2")
-        && std::arch::is_x86_feature_detected!("fma")
-        && std::arch::is_x86_feature_detected!("bmi1")
-        && std::arch::is_x86_feature_detected!("bmi2")
-        && std::arch::is_x86_feature_detected!("lzcnt")
-    {
+    if has_x86_64_v3() {
         // SAFETY: the CPU has the features, checked just above.
         return unsafe { li_v3(scene, ray, sampler, p, stats) };
     }
     li_portable(scene, ray, sampler, p, stats)
+}
+
+/// Whether the CPU has what [`li_v3`] is compiled for: AVX2, FMA, BMI1/2 and LZCNT.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+pub(crate) fn has_x86_64_v3() -> bool {
+    std::arch::is_x86_feature_detected!("avx2")
+        && std::arch::is_x86_feature_detected!("fma")
+        && std::arch::is_x86_feature_detected!("bmi1")
+        && std::arch::is_x86_feature_detected!("bmi2")
+        && std::arch::is_x86_feature_detected!("lzcnt")
 }
 
 /// [`li`] compiled for x86-64-v3 (the callees it needs are `#[inline(always)]`, so that

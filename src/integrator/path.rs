@@ -8,22 +8,26 @@ use crate::geometry::{Frame, Ray};
 use crate::material::TransportMode;
 use crate::render::{Backend, RenderError, RenderSettings, RenderStats, TilePixel};
 use crate::sampler::Sampler;
+use crate::scene::Interaction;
 use crate::scene::Scene;
 use crate::Color;
+use glam::Vec3A;
 
-/// The path tracer ready for a scene: one path at a time, or sixteen at a time where the
-/// settings' backend, the scene and the CPU allow ([`super::wavefront`]), with the same
-/// values either way.
+/// The path tracer ready for a scene: one path at a time ([`li`]), a stream of paths per
+/// tile ([`super::stream`]), or sixteen at a time where the settings' backend, the scene and
+/// the CPU allow ([`super::wavefront`]), with the same values each way.
 pub struct PathTracer<'a> {
     scene: &'a Scene,
-    params: IntegratorParams,
+    settings: &'a RenderSettings,
+    /// Tiles that the wavefront does not take are rendered by the stream.
+    stream: bool,
     #[cfg(target_arch = "x86_64")]
     wavefront: Option<super::wavefront::Wavefront<'a>>,
 }
 
 impl<'a> PathTracer<'a> {
     /// Refuses a wide backend that the CPU or the scene cannot run (`Auto` falls back).
-    pub fn new(scene: &'a Scene, s: &RenderSettings) -> Result<Self, RenderError> {
+    pub fn new(scene: &'a Scene, s: &'a RenderSettings) -> Result<Self, RenderError> {
         #[cfg(target_arch = "x86_64")]
         let wavefront = super::wavefront::Wavefront::new(scene, s);
         #[cfg(target_arch = "x86_64")]
@@ -39,7 +43,8 @@ impl<'a> PathTracer<'a> {
         }
         Ok(PathTracer {
             scene,
-            params: s.params,
+            settings: s,
+            stream: matches!(s.backend, Backend::Auto | Backend::Stream),
             #[cfg(target_arch = "x86_64")]
             wavefront,
         })
@@ -49,7 +54,7 @@ impl<'a> PathTracer<'a> {
 impl super::Integrator for PathTracer<'_> {
     #[inline]
     fn li(&self, ray: Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Color {
-        super::li(self.scene, ray, sampler, &self.params, stats)
+        super::li(self.scene, ray, sampler, &self.settings.params, stats)
     }
 
     fn render_tile(
@@ -64,57 +69,113 @@ impl super::Integrator for PathTracer<'_> {
             w.render_tile(camera, pixels, sums, stats);
             return true;
         }
-        let _ = (camera, pixels, sums, stats);
-        false
+        if self.stream {
+            super::stream::render_tile(self.scene, self.settings, camera, pixels, sums, stats);
+        }
+        self.stream
     }
 }
 
+/// Radiance along a camera ray, one path at a time: the loop "intersect, step" over
+/// [`PathState::step`], which holds all of the path's maths (the stream, [`super::stream`],
+/// runs the same function for many paths at a time).
 #[inline(always)]
 pub fn li(
     scene: &Scene,
-    mut ray: Ray,
+    ray: Ray,
     sampler: &mut Sampler,
     p: &IntegratorParams,
     stats: &mut RayStats,
 ) -> Color {
-    let mut l = Color::ZERO;
-    let mut beta = Color::ONE;
-    // η² accumulated over refractions, to undo radiance scaling in the roulette test.
-    let mut eta2 = 1.0f32;
-    // Previous vertex and BSDF pdf for MIS on emitter hits; None after a specular bounce.
-    let mut prev: Option<(glam::Vec3A, f32)> = None;
-    let max_depth = p.max_depth.unwrap_or(u32::MAX);
-    if max_depth == 0 {
-        return Color::ZERO; // no segment at all: not even emitters are seen
-    }
-    let mut depth = 0u32; // segments traced so far, minus one
+    let Some(mut path) = PathState::new(ray, p) else {
+        return Color::ZERO;
+    };
     loop {
+        let hit = scene.intersect(&path.ray);
+        if !path.step(scene, hit.as_ref(), sampler, p, stats) {
+            return path.l;
+        }
+    }
+}
+
+/// A path between two segments: the ray to trace next and what the vertices so far left
+/// (Kajiya 1986; Veach 1997 ch. 9; the structure follows pbrt-v4's `PathIntegrator` and
+/// Mitsuba 3's `path`). Its random numbers come from the camera sample's [`Sampler`], which
+/// the caller keeps beside it.
+#[derive(Clone, Copy, Debug)]
+pub struct PathState {
+    /// The segment to trace next.
+    pub ray: Ray,
+    /// Radiance gathered so far: the sample's value once [`PathState::step`] says the path
+    /// ended.
+    pub l: Color,
+    /// Throughput.
+    beta: Color,
+    /// η² accumulated over refractions, to undo radiance scaling in the roulette test.
+    eta2: f32,
+    /// Previous vertex and BSDF pdf for MIS on emitter hits; None after a specular bounce.
+    prev: Option<(Vec3A, f32)>,
+    /// Segments traced so far, minus one.
+    depth: u32,
+}
+
+impl PathState {
+    /// A path starting along the camera ray `ray`; None where `max_depth` is 0 (no segment
+    /// at all: not even emitters are seen, and the sample's value is zero).
+    #[inline(always)]
+    pub fn new(ray: Ray, p: &IntegratorParams) -> Option<PathState> {
+        if p.max_depth == Some(0) {
+            return None;
+        }
+        Some(PathState {
+            ray,
+            l: Color::ZERO,
+            beta: Color::ONE,
+            eta2: 1.0,
+            prev: None,
+            depth: 0,
+        })
+    }
+
+    /// One vertex: takes `hit`, the closest hit of `self.ray` (None if it left the scene),
+    /// adds what it sees and its next-event estimate to `self.l`, and either sets `self.ray`
+    /// to the next segment and returns true, or ends the path and returns false.
+    #[inline(always)]
+    pub fn step(
+        &mut self,
+        scene: &Scene,
+        hit: Option<&Interaction>,
+        sampler: &mut Sampler,
+        p: &IntegratorParams,
+        stats: &mut RayStats,
+    ) -> bool {
         stats.rays += 1;
-        let hidden = depth == 0 && p.hide_emitters;
-        let Some(si) = scene.intersect(&ray) else {
+        let ray = self.ray;
+        let hidden = self.depth == 0 && p.hide_emitters;
+        let Some(si) = hit else {
             if !hidden {
-                l += beta * escaped(scene, ray.d, prev, p.shadow_rays);
+                self.l += self.beta * escaped(scene, ray.d, self.prev, p.shadow_rays);
             }
-            break;
+            return false;
         };
         if !hidden {
-            l += beta * emitted(scene, &si, ray.d, prev, p.shadow_rays);
+            self.l += self.beta * emitted(scene, si, ray.d, self.prev, p.shadow_rays);
         }
         // A further vertex would make the path longer than max_depth segments.
-        if depth + 1 >= max_depth {
-            break;
+        if self.depth + 1 >= p.max_depth.unwrap_or(u32::MAX) {
+            return false;
         }
-        let material = &scene.material_at(&si);
+        let material = &scene.material_at(si);
         if material.is_black() {
-            break;
+            return false;
         }
         let frame = Frame::from_normal(si.ns);
         let wo = frame.to_local(-ray.d);
         if !material.is_specular() && !scene.lights.is_empty() {
-            l += beta
+            self.l += self.beta
                 * sample_lights(
                     scene,
-                    &si,
+                    si,
                     &frame,
                     wo,
                     material,
@@ -128,38 +189,35 @@ pub fn li(
         let [ux, uy, u1, u_rr] = sampler.next_4d();
         let u2 = glam::Vec2::new(ux, uy);
         let Some(bs) = material.sample(wo, u1, u2, TransportMode::Radiance) else {
-            break;
+            return false;
         };
-        beta *= bs.weight;
-        eta2 *= bs.eta * bs.eta;
-        prev = if bs.specular {
+        self.beta *= bs.weight;
+        self.eta2 *= bs.eta * bs.eta;
+        self.prev = if bs.specular {
             None
         } else {
             Some((si.p, bs.pdf))
         };
         let wi = frame.to_world(bs.wi);
-        ray = si.spawn_ray(wi);
-        depth += 1;
+        self.ray = si.spawn_ray(wi);
+        self.depth += 1;
         match p.rr {
             RussianRoulette::Fixed(q) => {
                 if u_rr >= q {
-                    break;
+                    return false;
                 }
-                beta /= q;
+                self.beta /= q;
             }
             RussianRoulette::Throughput { start } => {
-                if depth >= start {
-                    let q = (beta.max_element() * eta2).min(0.95);
+                if self.depth >= start {
+                    let q = (self.beta.max_element() * self.eta2).min(0.95);
                     if u_rr >= q {
-                        break;
+                        return false;
                     }
-                    beta /= q;
+                    self.beta /= q;
                 }
             }
         }
-        if beta == Color::ZERO {
-            break;
-        }
+        self.beta != Color::ZERO
     }
-    l
 }

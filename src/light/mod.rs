@@ -340,7 +340,7 @@ impl Lights {
     }
 
     /// The radiance of area light `light` at texture coordinates `uv`.
-    #[inline]
+    #[inline(always)]
     fn radiance_at(&self, light: &AreaLight, uv: impl FnOnce() -> Vec2) -> Color {
         if light.texture == NO_TEXTURE {
             light.radiance

@@ -91,7 +91,7 @@ impl Interaction {
 
     /// The shadow ray towards a light sample, and the parametric distance up to which it
     /// must be unobstructed (to infinity for a light at infinity).
-    #[inline]
+    #[inline(always)]
     pub fn spawn_ray_to_light(&self, ls: &crate::light::LightSample) -> (Ray, f32) {
         if ls.infinite {
             (self.spawn_ray(ls.wi), f32::INFINITY)
@@ -102,7 +102,7 @@ impl Interaction {
 
     /// A shadow ray from this point to the point `p2` (normal `n2`, error `err2`); returns
     /// the ray and the parametric distance up to which it must be unobstructed.
-    #[inline]
+    #[inline(always)]
     pub fn spawn_ray_to(&self, p2: Vec3A, err2: Vec3A, n2: Vec3A) -> (Ray, f32) {
         let d0 = p2 - self.p;
         let o = offset_ray_origin(self.p, self.p_err, self.ng, d0);

@@ -108,7 +108,7 @@ impl Backend {
     fn detect(asked: render::Backend) -> Option<Backend> {
         let (avx512, avx2) = match asked {
             render::Backend::Auto => (true, true),
-            render::Backend::Scalar => (false, false),
+            render::Backend::Scalar | render::Backend::Stream => (false, false),
             render::Backend::Avx512 => (true, false),
             render::Backend::Avx2 => (false, true),
         };

@@ -1,0 +1,180 @@
+//! The stream path tracer: a tile's camera samples as a pool of [`POOL`] paths in flight,
+//! traced a segment at a time for all of them — gather the rays of the live paths, find
+//! their closest hits in one call ([`Scene::intersect_many`]), then advance each path by one
+//! vertex — for any scene, camera, material, texture and light.
+//!
+//! The maths of a vertex is [`PathState::step`], the same function that the one-path loop
+//! [`super::path::li`] runs, so each sample's value is the same bits by construction; only
+//! the order in which samples finish changes, and the film's fixed-point sums
+//! ([`PixelSums`]) are exact in any order. A path that ends adds its value to its pixel and
+//! its slot takes the tile's next camera sample, so the pool stays full until the tile's
+//! samples run out, however long each path is (no depth bound, no compaction pass).
+//!
+//! Batching the rays is what lets intersection overlap the memory latency of several
+//! traversals (interleaved, prefetched traversal in `intersect_many`) instead of one
+//! traversal's dependent loads at a time: the argument of Laine, Karras and Aila, "Megakernels
+//! Considered Harmful: Wavefront Path Tracing on GPUs" (HPG 2013), for splitting the path
+//! loop into a trace stage and a shade stage over queues of paths, as pbrt-v4's wavefront
+//! integrator does (`src/pbrt/wavefront/`). Next-event estimation stays inside the step (its
+//! shadow rays of a vertex are traced as one packet, [`super::nee`]).
+
+use super::path::PathState;
+use super::{IntegratorParams, RayStats};
+use crate::camera::Camera;
+use crate::film::PixelSums;
+use crate::geometry::Ray;
+use crate::render::{self, RenderSettings, RenderStats, TilePixel};
+use crate::sampler::Sampler;
+use crate::scene::{Interaction, Scene};
+
+/// Paths in flight per tile (and rays per [`Scene::intersect_many`] call). With interleaved
+/// traversal, 256 and 512 rendered the gallery fastest (16 and 64 less so); with one ray
+/// after another, the size makes no difference (docs/performance.md).
+pub const POOL: usize = 256;
+
+/// A path in flight: its state, its camera sample's random numbers and its pixel (index
+/// into the tile's pixels).
+struct Slot {
+    path: PathState,
+    sampler: Sampler,
+    k: usize,
+}
+
+/// The tile's camera samples, pixel by pixel, each pixel's in index order.
+struct Queue<'a> {
+    pixels: &'a [TilePixel],
+    k: usize,
+    i: u32,
+}
+
+impl Iterator for Queue<'_> {
+    type Item = (usize, u32);
+
+    #[inline]
+    fn next(&mut self) -> Option<(usize, u32)> {
+        while let Some(p) = self.pixels.get(self.k) {
+            if self.i < p.samples.1 {
+                self.i += 1;
+                return Some((self.k, self.i - 1));
+            }
+            self.k += 1;
+            self.i = self.pixels.get(self.k).map_or(0, |p| p.samples.0);
+        }
+        None
+    }
+}
+
+/// Renders the samples of a tile's pixels (`pixels[k].samples` into `sums[k]`) as a
+/// stream (see the module documentation), with the same sums as one
+/// [`super::path::li`] at a time.
+pub(crate) fn render_tile(
+    scene: &Scene,
+    s: &RenderSettings,
+    camera: &Camera,
+    pixels: &[TilePixel],
+    sums: &mut [PixelSums],
+    stats: &mut RenderStats,
+) {
+    #[cfg(target_arch = "x86_64")]
+    if super::has_x86_64_v3() {
+        // SAFETY: the CPU has the features, checked just above.
+        return unsafe { render_tile_v3(scene, s, camera, pixels, sums, stats) };
+    }
+    render_tile_portable(scene, s, camera, pixels, sums, stats)
+}
+
+/// [`render_tile`] compiled for x86-64-v3, as [`super::li`] is.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
+unsafe fn render_tile_v3(
+    scene: &Scene,
+    s: &RenderSettings,
+    camera: &Camera,
+    pixels: &[TilePixel],
+    sums: &mut [PixelSums],
+    stats: &mut RenderStats,
+) {
+    render_tile_portable(scene, s, camera, pixels, sums, stats)
+}
+
+#[inline(always)]
+fn render_tile_portable(
+    scene: &Scene,
+    s: &RenderSettings,
+    camera: &Camera,
+    pixels: &[TilePixel],
+    sums: &mut [PixelSums],
+    stats: &mut RenderStats,
+) {
+    let p = &s.params;
+    let mut queue = Queue {
+        pixels,
+        k: 0,
+        i: pixels.first().map_or(0, |p| p.samples.0),
+    };
+    let mut pool: Vec<Slot> = Vec::with_capacity(POOL);
+    while pool.len() < POOL {
+        match start(s, camera, &mut queue, sums, stats) {
+            Some(slot) => pool.push(slot),
+            None => break,
+        }
+    }
+    let mut rays: Vec<Ray> = Vec::with_capacity(POOL);
+    let mut hits: Vec<Option<Interaction>> = vec![None; POOL];
+    while !pool.is_empty() {
+        rays.clear();
+        rays.extend(pool.iter().map(|slot| slot.path.ray));
+        let hits = &mut hits[..pool.len()];
+        scene.intersect_many(&rays, hits);
+        let mut live = pool.len();
+        for (slot, hit) in pool.iter_mut().zip(hits) {
+            if step(scene, slot, hit.as_ref(), p, &mut stats.rays) {
+                continue;
+            }
+            render::add_sample(&mut sums[slot.k], &pixels[slot.k], slot.path.l, stats);
+            match start(s, camera, &mut queue, sums, stats) {
+                Some(next) => *slot = next,
+                None => {
+                    // The queue is empty: this slot ends with its path (marked by k).
+                    slot.k = usize::MAX;
+                    live -= 1;
+                }
+            }
+        }
+        if live < pool.len() {
+            pool.retain(|slot| slot.k != usize::MAX);
+        }
+    }
+}
+
+/// One vertex of a slot's path (kept out of line of the loop above only for reading).
+#[inline(always)]
+fn step(
+    scene: &Scene,
+    slot: &mut Slot,
+    hit: Option<&Interaction>,
+    p: &IntegratorParams,
+    stats: &mut RayStats,
+) -> bool {
+    slot.path.step(scene, hit, &mut slot.sampler, p, stats)
+}
+
+/// The queue's next camera sample as a path (camera samples of a path that traces no
+/// segment, `max_depth` 0, add their zero at once); None once the queue is empty.
+#[inline(always)]
+fn start(
+    s: &RenderSettings,
+    camera: &Camera,
+    queue: &mut Queue,
+    sums: &mut [PixelSums],
+    stats: &mut RenderStats,
+) -> Option<Slot> {
+    loop {
+        let (k, i) = queue.next()?;
+        let (sampler, ray) = render::camera_sample(s, camera, &queue.pixels[k], i);
+        match PathState::new(ray, &s.params) {
+            Some(path) => return Some(Slot { path, sampler, k }),
+            None => render::add_sample(&mut sums[k], &queue.pixels[k], crate::Color::ZERO, stats),
+        }
+    }
+}
