@@ -2,6 +2,7 @@
 
 use super::ray::{gamma, Ray};
 use super::sqrt4;
+use crate::simd::{Float, Mask, Vector3};
 use glam::{Vec3A, Vec4};
 
 #[derive(Clone, Copy, Debug)]
@@ -33,33 +34,9 @@ impl Sphere {
     /// Gems, ch. 7, 2019); the roots then come from the stable form q = −b − sign(b)√Δ.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<f32> {
-        let f = ray.o - self.center;
-        let a = ray.d.length_squared();
-        let b = -f.dot(ray.d);
-        let l = f + (b / a) * ray.d;
-        let disc = a * (self.radius * self.radius - l.length_squared());
-        if disc < 0.0 {
-            return None;
-        }
-        let sq = disc.sqrt();
-        let c = f.length_squared() - self.radius * self.radius;
-        let q = b + sq.copysign(b);
-        let (mut t0, mut t1) = (c / q, q / a);
-        if q == 0.0 {
-            // Ray through the centre from the centre itself: both roots are ±r/|d|.
-            t0 = -sq / a;
-            t1 = sq / a;
-        }
-        if t0 > t1 {
-            std::mem::swap(&mut t0, &mut t1);
-        }
-        if t0 > 0.0 && t0 < t_max {
-            Some(t0)
-        } else if t1 > 0.0 && t1 < t_max {
-            Some(t1)
-        } else {
-            None
-        }
+        let r2 = self.radius * self.radius;
+        let (hit, t) = intersect_lanes(self.center, r2, ray.o, ray.d, t_max);
+        hit.then_some(t)
     }
 
     /// Whether [`Sphere::intersect`] finds a hit for each of four rays from one origin `o`
@@ -96,15 +73,56 @@ impl Sphere {
     /// (pbrt-v4 §6.8.5: reprojection leaves an error of γ(5) of the coordinates' magnitude).
     #[inline]
     pub fn surface_point(&self, p_approx: Vec3A) -> (Vec3A, Vec3A, Vec3A) {
-        let n = (p_approx - self.center).normalize();
-        let p = self.center + n * self.radius;
-        let err = (self.center.abs() + (n * self.radius).abs()) * gamma(5);
-        (p, n, err)
+        surface_point(self.center, self.radius, p_approx)
     }
 
     pub fn area(&self) -> f32 {
         4.0 * std::f32::consts::PI * self.radius * self.radius
     }
+}
+
+/// [`Sphere::intersect`] over any lanes, for the sphere of `center` and squared radius `r2`:
+/// the lanes that hit in (0, `t_max`), and there the nearer such root.
+#[inline(always)]
+pub fn intersect_lanes<V: Vector3>(
+    center: V,
+    r2: V::F,
+    o: V,
+    d: V,
+    t_max: V::F,
+) -> (Mask<V>, V::F) {
+    let zero = V::F::zero();
+    let f = o - center;
+    let a = d.dot(d);
+    let b = -f.dot(d);
+    let l = f + d.scale(b / a);
+    let disc = a * (r2 - l.dot(l));
+    // A negative discriminant misses (a NaN one fails every comparison below).
+    let real = !disc.lt(zero);
+    if !V::F::any(real) {
+        return (real, zero);
+    }
+    let sq = disc.sqrt();
+    let c = f.dot(f) - r2;
+    let q = b + sq.copysign(b);
+    // q = 0: a ray through the centre from the centre itself; both roots are ±r/|d|.
+    let centre = q.eq(zero);
+    let t0 = V::F::select(centre, -sq / a, c / q);
+    let t1 = V::F::select(centre, sq / a, q / a);
+    let swap = t0.gt(t1);
+    let (t0, t1) = (V::F::select(swap, t1, t0), V::F::select(swap, t0, t1));
+    let first = t0.gt(zero) & t0.lt(t_max);
+    let second = t1.gt(zero) & t1.lt(t_max);
+    (real & (first | second), V::F::select(first, t0, t1))
+}
+
+/// [`Sphere::surface_point`] over any lanes, for the sphere of `center` and `radius`.
+#[inline(always)]
+pub fn surface_point<V: Vector3>(center: V, radius: V::F, p_approx: V) -> (V, V, V) {
+    let n = (p_approx - center).normalize();
+    let p = center + n.scale(radius);
+    let err = (center.abs() + n.scale(radius).abs()).scale(V::F::splat(gamma(5)));
+    (p, n, err)
 }
 
 #[cfg(test)]

@@ -2,6 +2,7 @@
 //! steps, and the loop that feeds them camera samples and steps them.
 
 use super::rng::LaneSampler;
+use crate::simd::{Float, Vector3};
 use super::simd::{F, M, U, V3};
 use super::Wavefront;
 use crate::camera::Camera;

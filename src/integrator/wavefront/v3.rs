@@ -4,6 +4,7 @@
 //! target features (see `simd_avx2.rs`).
 
 use super::{F, M, U};
+use crate::simd::{Float, Vector3};
 use std::ops::{Add, Mul, Neg, Sub};
 
 /// Three-component vectors in sixteen lanes, for `Vec3A` (points, directions) and `Color`
@@ -43,11 +44,6 @@ impl V3 {
         self.y.store(&mut a[1]);
         self.z.store(&mut a[2]);
     }
-    /// glam's `dot`: (x·x' + y·y') + z·z'.
-    #[inline(always)]
-    pub fn dot(self, o: V3) -> F {
-        (self.x * o.x + self.y * o.y) + self.z * o.z
-    }
     /// glam's `cross`: x = a.y·b.z − b.y·a.z, and so on.
     #[inline(always)]
     pub fn cross(self, o: V3) -> V3 {
@@ -55,43 +51,6 @@ impl V3 {
             x: self.y * o.z - o.y * self.z,
             y: self.z * o.x - o.z * self.x,
             z: self.x * o.y - o.x * self.y,
-        }
-    }
-    /// glam's `normalize`: each component divided by the length.
-    #[inline(always)]
-    pub fn normalize(self) -> V3 {
-        self.div(self.dot(self).sqrt())
-    }
-    #[inline(always)]
-    pub fn scale(self, s: F) -> V3 {
-        V3 {
-            x: self.x * s,
-            y: self.y * s,
-            z: self.z * s,
-        }
-    }
-    #[inline(always)]
-    pub fn div(self, s: F) -> V3 {
-        V3 {
-            x: self.x / s,
-            y: self.y / s,
-            z: self.z / s,
-        }
-    }
-    #[inline(always)]
-    pub fn abs(self) -> V3 {
-        V3 {
-            x: self.x.abs(),
-            y: self.y.abs(),
-            z: self.z.abs(),
-        }
-    }
-    #[inline(always)]
-    pub fn select(m: M, a: V3, b: V3) -> V3 {
-        V3 {
-            x: F::select(m, a.x, b.x),
-            y: F::select(m, a.y, b.y),
-            z: F::select(m, a.z, b.z),
         }
     }
     /// Lanes where all three components equal zero (`Vec3 == Vec3::ZERO`).
@@ -117,6 +76,68 @@ impl V3 {
             x: F::lookup64(&table[0], idx),
             y: F::lookup64(&table[1], idx),
             z: F::lookup64(&table[2], idx),
+        }
+    }
+}
+
+impl Vector3 for V3 {
+    type F = F;
+    #[inline(always)]
+    fn new(x: F, y: F, z: F) -> V3 {
+        V3 { x, y, z }
+    }
+    #[inline(always)]
+    fn x(self) -> F {
+        self.x
+    }
+    #[inline(always)]
+    fn y(self) -> F {
+        self.y
+    }
+    #[inline(always)]
+    fn z(self) -> F {
+        self.z
+    }
+    /// glam's `dot`: (x·x' + y·y') + z·z'.
+    #[inline(always)]
+    fn dot(self, o: V3) -> F {
+        (self.x * o.x + self.y * o.y) + self.z * o.z
+    }
+    #[inline(always)]
+    fn scale(self, s: F) -> V3 {
+        V3 {
+            x: self.x * s,
+            y: self.y * s,
+            z: self.z * s,
+        }
+    }
+    #[inline(always)]
+    fn div(self, s: F) -> V3 {
+        V3 {
+            x: self.x / s,
+            y: self.y / s,
+            z: self.z / s,
+        }
+    }
+    #[inline(always)]
+    fn select(m: M, a: V3, b: V3) -> V3 {
+        V3 {
+            x: F::select(m, a.x, b.x),
+            y: F::select(m, a.y, b.y),
+            z: F::select(m, a.z, b.z),
+        }
+    }
+    /// glam's `normalize`: each component divided by the length.
+    #[inline(always)]
+    fn normalize(self) -> V3 {
+        self.div(self.dot(self).sqrt())
+    }
+    #[inline(always)]
+    fn abs(self) -> V3 {
+        V3 {
+            x: self.x.abs(),
+            y: self.y.abs(),
+            z: self.z.abs(),
         }
     }
 }
