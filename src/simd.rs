@@ -70,6 +70,8 @@ pub trait Vector3:
     /// Each component divided by `s`.
     fn div(self, s: Self::F) -> Self;
     fn select(m: Mask<Self>, a: Self, b: Self) -> Self;
+    /// `v` in every lane.
+    fn broadcast(v: Vec3A) -> Self;
     /// Each component's |x|.
     fn abs(self) -> Self;
     /// The unit vector: each component divided by the length (glam's SSE `normalize`).
@@ -178,6 +180,10 @@ impl Vector3 for Vec3A {
         }
     }
     #[inline(always)]
+    fn broadcast(v: Vec3A) -> Vec3A {
+        v
+    }
+    #[inline(always)]
     fn abs(self) -> Vec3A {
         Vec3A::abs(self)
     }
@@ -227,11 +233,137 @@ impl Vector3 for Vec3 {
         }
     }
     #[inline(always)]
+    fn broadcast(v: Vec3A) -> Vec3 {
+        v.into()
+    }
+    #[inline(always)]
     fn abs(self) -> Vec3 {
         Vec3::abs(self)
     }
     #[inline(always)]
     fn normalize(self) -> Vec3 {
         Vec3::normalize(self)
+    }
+}
+
+/// Three-component vectors of lanes, a component to a vector of lanes (structure of arrays):
+/// the vector type of the wide instances, for points, directions and colours alike.
+#[derive(Clone, Copy)]
+pub struct V3<T> {
+    pub x: T,
+    pub y: T,
+    pub z: T,
+}
+
+impl<T: Float> V3<T> {
+    #[inline(always)]
+    pub fn splat(v: [f32; 3]) -> Self {
+        V3 {
+            x: T::splat(v[0]),
+            y: T::splat(v[1]),
+            z: T::splat(v[2]),
+        }
+    }
+    #[inline(always)]
+    pub fn zero() -> Self {
+        V3::splat([0.0; 3])
+    }
+    /// glam's `cross`: x = a.y·b.z − b.y·a.z, and so on.
+    #[inline(always)]
+    pub fn cross(self, o: Self) -> Self {
+        V3 {
+            x: self.y * o.z - o.y * self.z,
+            y: self.z * o.x - o.z * self.x,
+            z: self.x * o.y - o.x * self.y,
+        }
+    }
+    /// Lanes where all three components equal zero (`Vec3 == Vec3::ZERO`).
+    #[inline(always)]
+    pub fn is_zero(self) -> T::Mask {
+        let z = T::zero();
+        self.x.eq(z) & self.y.eq(z) & self.z.eq(z)
+    }
+}
+
+impl<T: Float> Vector3 for V3<T> {
+    type F = T;
+    #[inline(always)]
+    fn new(x: T, y: T, z: T) -> Self {
+        V3 { x, y, z }
+    }
+    #[inline(always)]
+    fn x(self) -> T {
+        self.x
+    }
+    #[inline(always)]
+    fn y(self) -> T {
+        self.y
+    }
+    #[inline(always)]
+    fn z(self) -> T {
+        self.z
+    }
+    /// glam's `dot`: (x·x' + y·y') + z·z'.
+    #[inline(always)]
+    fn dot(self, o: Self) -> T {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+    #[inline(always)]
+    fn scale(self, s: T) -> Self {
+        V3::new(self.x * s, self.y * s, self.z * s)
+    }
+    #[inline(always)]
+    fn div(self, s: T) -> Self {
+        V3::new(self.x / s, self.y / s, self.z / s)
+    }
+    #[inline(always)]
+    fn select(m: T::Mask, a: Self, b: Self) -> Self {
+        V3::new(
+            T::select(m, a.x, b.x),
+            T::select(m, a.y, b.y),
+            T::select(m, a.z, b.z),
+        )
+    }
+    #[inline(always)]
+    fn broadcast(v: Vec3A) -> Self {
+        V3::splat(v.into())
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        V3::new(self.x.abs(), self.y.abs(), self.z.abs())
+    }
+    /// glam's SSE `normalize`: each component divided by the length.
+    #[inline(always)]
+    fn normalize(self) -> Self {
+        self.div(self.dot(self).sqrt())
+    }
+}
+
+impl<T: Float> Add for V3<T> {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        V3::new(self.x + o.x, self.y + o.y, self.z + o.z)
+    }
+}
+impl<T: Float> Sub for V3<T> {
+    type Output = Self;
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        V3::new(self.x - o.x, self.y - o.y, self.z - o.z)
+    }
+}
+impl<T: Float> Mul for V3<T> {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, o: Self) -> Self {
+        V3::new(self.x * o.x, self.y * o.y, self.z * o.z)
+    }
+}
+impl<T: Float> Neg for V3<T> {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        V3::new(-self.x, -self.y, -self.z)
     }
 }

@@ -95,17 +95,19 @@ impl Dielectric {
 
     #[inline]
     pub fn sample(&self, wo: Vec3A, u: f32, mode: TransportMode) -> Option<BsdfSample> {
-        let f = fresnel_dielectric(wo.z, self.eta);
-        if u < f {
+        let (wi, reflects, etap, ok) = sample(wo, self.eta, u);
+        if !ok {
+            return None;
+        }
+        if reflects {
             return Some(BsdfSample {
-                wi: reflect_local(wo),
+                wi,
                 weight: self.specular_reflectance,
                 pdf: 0.0,
                 specular: true,
                 eta: 1.0,
             });
         }
-        let (wi, etap) = refract_local(wo, self.eta)?;
         // Radiance is compressed into the smaller solid angle of the denser medium: it
         // scales by 1/η² across the interface (Veach 1997 §5.2; pbrt-v4 §9.5.2).
         let scale = match mode {
@@ -120,4 +122,16 @@ impl Dielectric {
             eta: etap,
         })
     }
+}
+
+/// [`Dielectric::sample`]'s choice over any lanes, `u` uniform: reflection with probability
+/// F, else refraction. The direction, the lanes that reflect, the relative index crossed
+/// where refracting, and the lanes with a sample (none where refraction would be total
+/// internal reflection).
+#[inline(always)]
+pub fn sample<V: Vector3>(wo: V, eta: V::F, u: V::F) -> (V, Mask<V>, V::F, Mask<V>) {
+    let reflects = u.lt(fresnel_dielectric(wo.z(), eta));
+    let (refracted, etap, refracts) = refract(wo, eta);
+    let wi = V::select(reflects, reflect_local(wo), refracted);
+    (wi, reflects, etap, reflects | refracts)
 }

@@ -3,9 +3,7 @@
 //! [`crate::material`] instanced for the lanes.
 
 use super::simd::{F, M, V3};
-use crate::material::dielectric::{fresnel_dielectric, refract};
-use crate::material::lambert;
-use crate::material::mirror::reflect_local;
+use crate::material::{dielectric, lambert};
 use crate::simd::{Float, Vector3};
 
 /// The lanes' BSDF samples (`Material::sample` in radiance mode).
@@ -46,12 +44,9 @@ pub fn sample(
         z: (wo.z * side) * side,
     };
     // Glass (`Dielectric::sample`): reflect with probability F, else refract.
-    let f = fresnel_dielectric(wo.z, eta);
-    let reflects = u1.lt(f);
-    let (refracted, etap, refracts) = refract(wo, eta);
-    let glass_ok = glass & (reflects | refracts);
+    let (glass_wi, reflects, etap, glass_ok) = dielectric::sample(wo, eta, u1);
+    let glass_ok = glass & glass_ok;
     let glass_reflects = glass & reflects;
-    let reflected = reflect_local(wo);
     let scale = one / (etap * etap);
     let wi = V3::select(
         lambert,
@@ -60,11 +55,7 @@ pub fn sample(
             y: h.y,
             z: h.z * side,
         },
-        V3::select(
-            mirror,
-            mirrored,
-            V3::select(glass_reflects, reflected, refracted),
-        ),
+        V3::select(mirror, mirrored, glass_wi),
     );
     let weight = V3::select(
         lambert | mirror,
