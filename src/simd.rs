@@ -11,7 +11,7 @@
 //! construction. The functions built on them are `#[inline(always)]`, so that they are
 //! compiled into their callers with the callers' target features (a call would lose them).
 
-use glam::{Vec3, Vec3A};
+use glam::{BVec4A, Vec3, Vec3A, Vec4};
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
 /// f32 lanes: `f32` itself, or a SIMD vector of them.
@@ -138,6 +138,63 @@ impl Float for f32 {
     #[inline(always)]
     fn any(m: bool) -> bool {
         m
+    }
+}
+
+/// Four lanes in an SSE (or NEON) register: shadow-ray packets of four.
+impl Float for Vec4 {
+    type Mask = BVec4A;
+    #[inline(always)]
+    fn splat(x: f32) -> Vec4 {
+        Vec4::splat(x)
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Vec4 {
+        crate::geometry::sqrt4(self)
+    }
+    #[inline(always)]
+    fn abs(self) -> Vec4 {
+        Vec4::abs(self)
+    }
+    #[inline(always)]
+    fn max_num(self, o: Vec4) -> Vec4 {
+        Vec4::max(self, o)
+    }
+    #[inline(always)]
+    fn min_num(self, o: Vec4) -> Vec4 {
+        Vec4::min(self, o)
+    }
+    #[inline(always)]
+    fn copysign(self, sign: Vec4) -> Vec4 {
+        Vec4::copysign(self, sign)
+    }
+    #[inline(always)]
+    fn lt(self, o: Vec4) -> BVec4A {
+        self.cmplt(o)
+    }
+    #[inline(always)]
+    fn le(self, o: Vec4) -> BVec4A {
+        self.cmple(o)
+    }
+    #[inline(always)]
+    fn gt(self, o: Vec4) -> BVec4A {
+        self.cmpgt(o)
+    }
+    #[inline(always)]
+    fn ge(self, o: Vec4) -> BVec4A {
+        self.cmpge(o)
+    }
+    #[inline(always)]
+    fn eq(self, o: Vec4) -> BVec4A {
+        self.cmpeq(o)
+    }
+    #[inline(always)]
+    fn select(m: BVec4A, a: Vec4, b: Vec4) -> Vec4 {
+        Vec4::select(m, a, b)
+    }
+    #[inline(always)]
+    fn any(m: BVec4A) -> bool {
+        m.any()
     }
 }
 

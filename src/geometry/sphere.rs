@@ -1,8 +1,7 @@
 //! Analytic spheres, intersected with the numerically robust quadratic.
 
 use super::ray::{gamma, Ray};
-use super::sqrt4;
-use crate::simd::{Float, Mask, Vector3};
+use crate::simd::{Float, Mask, Vector3, V3};
 use glam::{Vec3A, Vec4};
 
 #[derive(Clone, Copy, Debug)]
@@ -45,28 +44,10 @@ impl Sphere {
     /// `intersect(..).is_some()` for its ray. For shadow-ray packets.
     #[inline(always)]
     pub fn occludes4(&self, o: Vec3A, d: [Vec4; 3], t_max: Vec4) -> u32 {
-        let f = o - self.center;
-        let fs = [Vec4::splat(f.x), Vec4::splat(f.y), Vec4::splat(f.z)];
-        let dot = |x: &[Vec4; 3], y: &[Vec4; 3]| (x[0] * y[0] + x[1] * y[1]) + x[2] * y[2];
-        let a = dot(&d, &d);
-        let b = -dot(&fs, &d);
-        let ba = b / a;
-        let l: [Vec4; 3] = std::array::from_fn(|k| fs[k] + ba * d[k]);
         let r2 = Vec4::splat(self.radius * self.radius);
-        let disc = a * (r2 - dot(&l, &l));
-        // Lanes with a negative (or NaN) discriminant miss: their square root is NaN, which
-        // fails every comparison below.
-        let sq = sqrt4(disc);
-        let c = Vec4::splat(f.length_squared() - self.radius * self.radius);
-        let q = b + sq.copysign(b);
-        let centre = q.cmpeq(Vec4::ZERO);
-        let t0 = Vec4::select(centre, -sq / a, c / q);
-        let t1 = Vec4::select(centre, sq / a, q / a);
-        let swap = t0.cmpgt(t1);
-        let (t0, t1) = (Vec4::select(swap, t1, t0), Vec4::select(swap, t0, t1));
-        let zero = Vec4::ZERO;
-        let hit = (t0.cmpgt(zero) & t0.cmplt(t_max)) | (t1.cmpgt(zero) & t1.cmplt(t_max));
-        (hit & disc.cmpge(zero)).bitmask()
+        let (o, c) = (V3::broadcast(o), V3::broadcast(self.center));
+        let d = V3::new(d[0], d[1], d[2]);
+        intersect_lanes(c, r2, o, d, t_max).0.bitmask()
     }
 
     /// The hit point reprojected onto the surface, its outward unit normal and its error bound
@@ -107,8 +88,10 @@ pub fn intersect_lanes<V: Vector3>(
     let q = b + sq.copysign(b);
     // q = 0: a ray through the centre from the centre itself; both roots are ±r/|d|.
     let centre = q.eq(zero);
-    let t0 = V::F::select(centre, -sq / a, c / q);
-    let t1 = V::F::select(centre, sq / a, q / a);
+    // (Operands selected before the division: the quotients the two cases would give,
+    // for two divisions.)
+    let t0 = V::F::select(centre, -sq, c) / V::F::select(centre, a, q);
+    let t1 = V::F::select(centre, sq, q) / a;
     let swap = t0.gt(t1);
     let (t0, t1) = (V::F::select(swap, t1, t0), V::F::select(swap, t0, t1));
     let first = t0.gt(zero) & t0.lt(t_max);

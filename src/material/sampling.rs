@@ -24,8 +24,8 @@ pub fn disk_concentric<T: Float>(ux: T, uy: T) -> (T, T) {
     let r = T::select(xmaj, ox, oy);
     let ratio = T::select(xmaj, oy, ox) / r;
     let (s, c) = sin_cos_quarter(T::splat(FRAC_PI_4) * ratio);
-    let x = T::select(centre, zero, T::select(xmaj, r * c, r * s));
-    let y = T::select(centre, zero, T::select(xmaj, r * s, r * c));
+    let x = T::select(centre, zero, r * T::select(xmaj, c, s));
+    let y = T::select(centre, zero, r * T::select(xmaj, s, c));
     (x, y)
 }
 

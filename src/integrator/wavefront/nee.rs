@@ -9,6 +9,7 @@ use super::Wavefront;
 use crate::accel::{ShadowPacket, PACKET};
 use crate::geometry::ray::{offset_by, offset_push, offset_ray_origin, SHADOW_EPSILON};
 use crate::geometry::Frame;
+use crate::integrator::nee::{lambert_weight, shadow_dir, wrap};
 use crate::integrator::RayStats;
 use crate::light::{planar_point, towards};
 use crate::material::lambert;
@@ -91,7 +92,7 @@ impl Wavefront<'_> {
         if lanes == 0 {
             return V3::zero();
         }
-        let (zero, one) = (F::zero(), F::splat(1.0));
+        let zero = F::zero();
         let lt = &self.light;
         let n = self.shadow_rays;
         let nf = n as f32;
@@ -120,22 +121,16 @@ impl Wavefront<'_> {
             for s in 0..m {
                 let j = first + s as u32;
                 // Sample j of the lattice shifted by Δ, wrapped into [0, 1).
-                let wrap = |x: F| F::select(x.ge(one), x - one, x);
                 let u = wrap(du + F::splat(j as f32) * inv_n);
                 let w = wrap(dv + F::splat(crate::integrator::lattice_v(j)));
                 let q = planar_point(a, b, c, lt.triangle, u, w);
                 let d = q - v.p;
                 let dist2 = d.dot(d);
                 under[s] = v.ng.dot(d).lt(zero);
-                let a_l = nl.dot(d) * neg_area;
-                let a_s = ns.dot(d) * v.side;
-                good[s] = lanes & dist2.gt(zero) & a_l.gt(zero) & a_s.gt(zero);
-                let inv = one / dist2;
-                let t = (a_l * a_s) * (inv * inv);
-                weight[s] = (k * t) / (k + t * t);
-                let o = V3::select(under[s], below, above);
-                let target = offset_by(q, off, nl, o - q);
-                (target - o).store(&mut dirs[s]);
+                let (faces, w) = lambert_weight(d, dist2, (nl, neg_area), (ns, v.side), k);
+                good[s] = lanes & dist2.gt(zero) & faces;
+                weight[s] = w;
+                shadow_dir(q, (nl, off), under[s], (above, below)).store(&mut dirs[s]);
             }
             // Each lane's shadow rays, in up to two packets by the side they leave from.
             let mut visible = [0 as M; PACKET];
