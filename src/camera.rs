@@ -393,8 +393,14 @@ impl CameraDesc {
 
 impl Camera {
     /// The point of the image plane at film coordinates (s, t) in [0,1]², s right, t down.
+    #[inline]
+    pub fn plane_point(&self, s: f32, t: f32) -> Vec3A {
+        self.plane_point_lanes(s, t)
+    }
+
+    /// [`Camera::plane_point`] over any lanes.
     #[inline(always)]
-    pub fn plane_point<V: Vector3>(&self, s: V::F, t: V::F) -> V {
+    pub fn plane_point_lanes<V: Vector3>(&self, s: V::F, t: V::F) -> V {
         let v = V::broadcast;
         v(self.tl) + v(self.right).scale(s) + v(self.down).scale(t) + v(self.twist).scale(s * t)
     }
@@ -430,7 +436,7 @@ impl Camera {
         let t = (y as f32 + u.y) / self.height as f32;
         // The plane lies at distance 1 along the view direction, so the pinhole ray reaches
         // the plane of focus at `focus` times its way to the image plane.
-        let focus_p = self.eye + (self.plane_point::<Vec3A>(s, t) - self.eye) * focus;
+        let focus_p = self.eye + (self.plane_point(s, t) - self.eye) * focus;
         let a = crate::material::sampling::square_to_disk_concentric(lens) * radius;
         let o = self.eye + lu * a.x + lv * a.y;
         Ray::new(o, (focus_p - o).normalize())

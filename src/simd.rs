@@ -81,65 +81,71 @@ pub trait Vector3:
 /// The lane mask of a vector type.
 pub type Mask<V> = <<V as Vector3>::F as Float>::Mask;
 
-impl Float for f32 {
-    type Mask = bool;
-    #[inline(always)]
-    fn splat(x: f32) -> f32 {
-        x
-    }
-    #[inline(always)]
-    fn sqrt(self) -> f32 {
-        f32::sqrt(self)
-    }
-    #[inline(always)]
-    fn abs(self) -> f32 {
-        f32::abs(self)
-    }
-    #[inline(always)]
-    fn max_num(self, o: f32) -> f32 {
-        f32::max(self, o)
-    }
-    #[inline(always)]
-    fn min_num(self, o: f32) -> f32 {
-        f32::min(self, o)
-    }
-    #[inline(always)]
-    fn copysign(self, sign: f32) -> f32 {
-        f32::copysign(self, sign)
-    }
-    #[inline(always)]
-    fn lt(self, o: f32) -> bool {
-        self < o
-    }
-    #[inline(always)]
-    fn le(self, o: f32) -> bool {
-        self <= o
-    }
-    #[inline(always)]
-    fn gt(self, o: f32) -> bool {
-        self > o
-    }
-    #[inline(always)]
-    fn ge(self, o: f32) -> bool {
-        self >= o
-    }
-    #[inline(always)]
-    fn eq(self, o: f32) -> bool {
-        self == o
-    }
-    #[inline(always)]
-    fn select(m: bool, a: f32, b: f32) -> f32 {
-        if m {
-            a
-        } else {
-            b
+/// One lane.
+macro_rules! one_lane {
+    ($t:ty) => {
+        impl Float for $t {
+            type Mask = bool;
+            #[inline(always)]
+            fn splat(x: f32) -> $t {
+                x as $t
+            }
+            #[inline(always)]
+            fn sqrt(self) -> $t {
+                <$t>::sqrt(self)
+            }
+            #[inline(always)]
+            fn abs(self) -> $t {
+                <$t>::abs(self)
+            }
+            #[inline(always)]
+            fn max_num(self, o: $t) -> $t {
+                <$t>::max(self, o)
+            }
+            #[inline(always)]
+            fn min_num(self, o: $t) -> $t {
+                <$t>::min(self, o)
+            }
+            #[inline(always)]
+            fn copysign(self, sign: $t) -> $t {
+                <$t>::copysign(self, sign)
+            }
+            #[inline(always)]
+            fn lt(self, o: $t) -> bool {
+                self < o
+            }
+            #[inline(always)]
+            fn le(self, o: $t) -> bool {
+                self <= o
+            }
+            #[inline(always)]
+            fn gt(self, o: $t) -> bool {
+                self > o
+            }
+            #[inline(always)]
+            fn ge(self, o: $t) -> bool {
+                self >= o
+            }
+            #[inline(always)]
+            fn eq(self, o: $t) -> bool {
+                self == o
+            }
+            #[inline(always)]
+            fn select(m: bool, a: $t, b: $t) -> $t {
+                if m {
+                    a
+                } else {
+                    b
+                }
+            }
+            #[inline(always)]
+            fn any(m: bool) -> bool {
+                m
+            }
         }
-    }
-    #[inline(always)]
-    fn any(m: bool) -> bool {
-        m
-    }
+    };
 }
+one_lane!(f32);
 
 /// Four lanes in an SSE (or NEON) register: shadow-ray packets of four.
 impl Float for Vec4 {

@@ -35,7 +35,10 @@ impl Sphere {
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<f32> {
         let r2 = self.radius * self.radius;
         let (hit, t) = intersect_lanes(self.center, r2, ray.o, ray.d, t_max);
-        hit.then_some(t)
+        if !hit {
+            return None;
+        }
+        Some(t)
     }
 
     /// Whether [`Sphere::intersect`] finds a hit for each of four rays from one origin `o`
@@ -86,12 +89,13 @@ pub fn intersect_lanes<V: Vector3>(
     let sq = disc.sqrt();
     let c = f.dot(f) - r2;
     let q = b + sq.copysign(b);
+    let (mut t0, mut t1) = (c / q, q / a);
     // q = 0: a ray through the centre from the centre itself; both roots are ±r/|d|.
     let centre = q.eq(zero);
-    // (Operands selected before the division: the quotients the two cases would give,
-    // for two divisions.)
-    let t0 = V::F::select(centre, -sq, c) / V::F::select(centre, a, q);
-    let t1 = V::F::select(centre, sq, q) / a;
+    if V::F::any(centre) {
+        t0 = V::F::select(centre, -sq / a, t0);
+        t1 = V::F::select(centre, sq / a, t1);
+    }
     let swap = t0.gt(t1);
     let (t0, t1) = (V::F::select(swap, t1, t0), V::F::select(swap, t0, t1));
     let first = t0.gt(zero) & t0.lt(t_max);

@@ -21,8 +21,14 @@ pub struct Dielectric {
 /// Unpolarised Fresnel reflectance of a dielectric interface (pbrt-v4 §9.3.5,
 /// `FrDielectric`). `cos_i` is measured against the normal on the outside, `eta` is
 /// inside over outside; a negative `cos_i` means the light arrives from inside.
+#[inline]
+pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
+    fresnel_dielectric_lanes(cos_i, eta)
+}
+
+/// [`fresnel_dielectric`] over any lanes.
 #[inline(always)]
-pub fn fresnel_dielectric<T: Float>(cos_i: T, eta: T) -> T {
+pub fn fresnel_dielectric_lanes<T: Float>(cos_i: T, eta: T) -> T {
     let one = T::splat(1.0);
     // `f32::clamp(-1, 1)`, NaN kept.
     let c = T::select(cos_i.lt(-one), -one, cos_i);
@@ -62,7 +68,10 @@ pub fn fresnel_refraction(cos_i: f32, eta: f32) -> (f32, f32, f32, f32) {
 #[inline]
 pub fn refract_local(wi: Vec3A, eta: f32) -> Option<(Vec3A, f32)> {
     let (w, eta, ok) = refract(wi, eta);
-    ok.then_some((w, eta))
+    if !ok {
+        return None;
+    }
+    Some((w, eta))
 }
 
 /// [`refract_local`] over any lanes: the direction, the index crossed, and the lanes where
@@ -130,7 +139,7 @@ impl Dielectric {
 /// internal reflection).
 #[inline(always)]
 pub fn sample<V: Vector3>(wo: V, eta: V::F, u: V::F) -> (V, Mask<V>, V::F, Mask<V>) {
-    let reflects = u.lt(fresnel_dielectric(wo.z(), eta));
+    let reflects = u.lt(fresnel_dielectric_lanes(wo.z(), eta));
     let (refracted, etap, refracts) = refract(wo, eta);
     let wi = V::select(reflects, reflect_local(wo), refracted);
     (wi, reflects, etap, reflects | refracts)

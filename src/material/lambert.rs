@@ -1,6 +1,6 @@
 //! The Lambertian (ideal diffuse) BSDF: f = ρ/π.
 
-use super::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
+use super::sampling::{cosine_hemisphere, cosine_hemisphere_pdf, cosine_hemisphere_pdf_lanes};
 use super::BsdfSample;
 use crate::simd::{Float, Mask, Vector3};
 use crate::Color;
@@ -25,8 +25,11 @@ impl Lambert {
     #[inline]
     pub fn sample(&self, _wo: Vec3A, u: Vec2) -> Option<BsdfSample> {
         let (wi, pdf, ok) = sample::<Vec3A>(u.x, u.y);
+        if !ok {
+            return None;
+        }
         // f·cos/pdf = (ρ/π)·cos/(cos/π) = ρ.
-        ok.then_some(BsdfSample {
+        Some(BsdfSample {
             wi,
             weight: self.albedo,
             pdf,
@@ -49,5 +52,9 @@ pub fn eval<C: Vector3>(albedo: C, cos_i: C::F) -> C {
 #[inline(always)]
 pub fn sample<V: Vector3>(ux: V::F, uy: V::F) -> (V, V::F, Mask<V>) {
     let wi: V = cosine_hemisphere(ux, uy);
-    (wi, cosine_hemisphere_pdf(wi.z()), !wi.z().le(V::F::zero()))
+    (
+        wi,
+        cosine_hemisphere_pdf_lanes(wi.z()),
+        !wi.z().le(V::F::zero()),
+    )
 }

@@ -23,7 +23,7 @@ pub fn disk_concentric<T: Float>(ux: T, uy: T) -> (T, T) {
     let xmaj = ox.abs().gt(oy.abs());
     let r = T::select(xmaj, ox, oy);
     let ratio = T::select(xmaj, oy, ox) / r;
-    let (s, c) = sin_cos_quarter(T::splat(FRAC_PI_4) * ratio);
+    let (s, c) = sin_cos_quarter_lanes(T::splat(FRAC_PI_4) * ratio);
     let x = T::select(centre, zero, r * T::select(xmaj, c, s));
     let y = T::select(centre, zero, r * T::select(xmaj, s, c));
     (x, y)
@@ -34,7 +34,13 @@ pub fn disk_concentric<T: Float>(ux: T, uy: T) -> (T, T) {
 /// that interval, without the argument reduction a library call pays for. The concentric map
 /// calls it once a diffuse bounce, where libm's `sincosf` cost 3 % of a Cornell box render.
 #[inline(always)]
-pub fn sin_cos_quarter<T: Float>(x: T) -> (T, T) {
+pub fn sin_cos_quarter(x: f32) -> (f32, f32) {
+    sin_cos_quarter_lanes(x)
+}
+
+/// [`sin_cos_quarter`] over any lanes.
+#[inline(always)]
+pub fn sin_cos_quarter_lanes<T: Float>(x: T) -> (T, T) {
     let k = T::splat;
     let z = x * x;
     let s = ((((k(-1.951_529_6e-4) * z + k(8.332_161e-3)) * z - k(1.666_665_5e-1)) * z) * x) + x;
@@ -60,8 +66,14 @@ pub fn cosine_hemisphere<V: Vector3>(ux: V::F, uy: V::F) -> V {
     V::new(x, y, z)
 }
 
+#[inline]
+pub fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
+    cosine_hemisphere_pdf_lanes(cos_theta)
+}
+
+/// [`cosine_hemisphere_pdf`] over any lanes.
 #[inline(always)]
-pub fn cosine_hemisphere_pdf<T: Float>(cos_theta: T) -> T {
+pub fn cosine_hemisphere_pdf_lanes<T: Float>(cos_theta: T) -> T {
     cos_theta.max_num(T::zero()) * T::splat(FRAC_1_PI)
 }
 
@@ -76,8 +88,14 @@ pub fn square_to_uniform_sphere(u: Vec2) -> Vec3A {
 
 /// Power heuristic with β = 2 (Veach, PhD thesis, 1997, eq. 9.13), with the sample counts
 /// folded into the pdfs by the caller.
+#[inline]
+pub fn power_heuristic(f: f32, g: f32) -> f32 {
+    power_heuristic_lanes(f, g)
+}
+
+/// [`power_heuristic`] over any lanes.
 #[inline(always)]
-pub fn power_heuristic<T: Float>(f: T, g: T) -> T {
+pub fn power_heuristic_lanes<T: Float>(f: T, g: T) -> T {
     let (f2, g2) = (f * f, g * g);
     let sum = f2 + g2;
     let r = T::select(sum.eq(T::zero()), T::zero(), f2 / sum);

@@ -160,7 +160,7 @@ impl Wavefront<'_> {
         let [ux, uy] = st.rng.next::<2>(fresh);
         let s = (F::load(px) + ux) / F::splat(cam.width as f32);
         let t = (F::load(py) + uy) / F::splat(cam.height as f32);
-        let p: V3 = cam.plane_point(s, t);
+        let p: V3 = cam.plane_point_lanes(s, t);
         let eye = V3::broadcast(cam.eye);
         let d = (p - eye).normalize();
         let keep = |a: &mut [[f32; 16]; 3], x: V3| V3::select(fresh, x, V3::load(a)).store(a);

@@ -13,8 +13,8 @@ use crate::integrator::nee::{lambert_weight, shadow_dir, wrap};
 use crate::integrator::RayStats;
 use crate::light::{planar_point, towards};
 use crate::material::lambert;
-use crate::material::sampling::cosine_hemisphere_pdf;
-use crate::material::sampling::power_heuristic;
+use crate::material::sampling::cosine_hemisphere_pdf_lanes;
+use crate::material::sampling::power_heuristic_lanes;
 use crate::simd::{Float, Vector3};
 use glam::Vec3A;
 use std::f32::consts::{FRAC_1_PI, PI};
@@ -57,14 +57,14 @@ impl Wavefront<'_> {
         let wil = v.frame.to_local(wi);
         let wz = wil.z * v.side;
         let f = V3::select(v.oriented, lambert::eval(v.albedo, wz), V3::zero());
-        let bsdf_pdf = F::select(v.oriented, cosine_hemisphere_pdf(wz), zero);
+        let bsdf_pdf = F::select(v.oriented, cosine_hemisphere_pdf_lanes(wz), zero);
         let f = f.scale(wil.z.abs());
         let shadow = lanes & !dist2.eq(zero) & !cos_l.le(zero) & !f.is_zero();
         // The shadow ray (`spawn_ray_to`), both ends pushed off their surfaces.
         let so = offset_ray_origin(v.p, v.p_err, v.ng, dl);
         let loff = V3::splat(lt.offset);
         let target = offset_by(pl, loff, ln, so - pl);
-        let mis = power_heuristic(one * pdf, bsdf_pdf);
+        let mis = power_heuristic_lanes(one * pdf, bsdf_pdf);
         let contribution = (f * V3::splat(lt.radiance)).scale(mis / pdf);
         (shadow, so, target - so, contribution)
     }

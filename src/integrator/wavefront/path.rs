@@ -15,7 +15,7 @@ use crate::geometry::triangle::barycentric_point;
 use crate::geometry::Frame;
 use crate::integrator::RussianRoulette;
 use crate::light::area_pdf;
-use crate::material::sampling::power_heuristic;
+use crate::material::sampling::power_heuristic_lanes;
 use crate::simd::{Float, Vector3};
 use crate::render::{RenderStats, TilePixel};
 
@@ -92,7 +92,7 @@ impl Wavefront<'_> {
         let prev_p = V3::load(&st.prev_p);
         let light_pdf = area_pdf(prev_p, p, ng, F::splat(lt.pmf), F::splat(lt.area));
         let rays = F::splat(self.shadow_rays as f32);
-        let mis = power_heuristic(F::load(&st.prev_pdf), rays * light_pdf);
+        let mis = power_heuristic_lanes(F::load(&st.prev_pdf), rays * light_pdf);
         let e = V3::select(emitter & st.has_prev, le.scale(mis), le);
         l = V3::select(hit & !hidden, l + beta * e, l);
 
