@@ -1,6 +1,9 @@
 //! The Lambertian (ideal diffuse) BSDF: f = ρ/π.
 
-use super::sampling::{cosine_hemisphere, cosine_hemisphere_pdf, cosine_hemisphere_pdf_lanes};
+use super::sampling::{
+    cosine_hemisphere, cosine_hemisphere_pdf, cosine_hemisphere_pdf_lanes,
+    square_to_cosine_hemisphere,
+};
 use super::BsdfSample;
 use crate::simd::{Float, Mask, Vector3};
 use crate::Color;
@@ -24,7 +27,8 @@ impl Lambert {
     }
     #[inline]
     pub fn sample(&self, _wo: Vec3A, u: Vec2) -> Option<BsdfSample> {
-        let (wi, pdf, ok) = sample::<Vec3A>(u.x, u.y);
+        let wi = square_to_cosine_hemisphere(u);
+        let (pdf, ok) = (cosine_hemisphere_pdf(wi.z), !wi.z.le(0.0));
         // f·cos/pdf = (ρ/π)·cos/(cos/π) = ρ. (`then_some` compiles to fewer instructions
         // here than an early return.)
         ok.then_some(BsdfSample {

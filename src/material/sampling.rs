@@ -8,8 +8,20 @@ use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
 /// Between Disk and Square", JGT 2(3), 1997).
 #[inline]
 pub fn square_to_disk_concentric(u: Vec2) -> Vec2 {
-    let (x, y) = disk_concentric(u.x, u.y);
-    Vec2::new(x, y)
+    // The one-lane form branches where `disk_concentric` selects: the same values, but the
+    // selects made the scalar path 2–4 % slower (256² Cornell box and TNCG15 room, one
+    // thread, alternating runs), so this form stays until a generic one compiles as well.
+    let o = 2.0 * u - Vec2::ONE;
+    if o.x == 0.0 && o.y == 0.0 {
+        return Vec2::ZERO;
+    }
+    if o.x.abs() > o.y.abs() {
+        let (s, c) = sin_cos_quarter(FRAC_PI_4 * (o.y / o.x));
+        Vec2::new(o.x * c, o.x * s)
+    } else {
+        let (s, c) = sin_cos_quarter(FRAC_PI_4 * (o.x / o.y));
+        Vec2::new(o.y * s, o.y * c)
+    }
 }
 
 /// [`square_to_disk_concentric`] over any lanes: (x, y) on the disk.
@@ -53,7 +65,9 @@ pub fn sin_cos_quarter_lanes<T: Float>(x: T) -> (T, T) {
 /// Cosine-weighted hemisphere around +z (Malley's method): pdf = cos θ / π.
 #[inline]
 pub fn square_to_cosine_hemisphere(u: Vec2) -> Vec3A {
-    cosine_hemisphere(u.x, u.y)
+    let d = square_to_disk_concentric(u);
+    let z = (1.0 - d.length_squared()).max(0.0).sqrt();
+    Vec3A::new(d.x, d.y, z)
 }
 
 /// [`square_to_cosine_hemisphere`] over any lanes.
