@@ -16,6 +16,7 @@
 
 use crate::geometry::Ray;
 use crate::sampler::Sampler;
+use crate::simd::Vector3;
 use glam::{Vec2, Vec3, Vec3A};
 
 /// Which image axis a perspective camera's field of view spans (Mitsuba's `fov_axis`).
@@ -394,7 +395,14 @@ impl Camera {
     /// The point of the image plane at film coordinates (s, t) in [0,1]², s right, t down.
     #[inline]
     pub fn plane_point(&self, s: f32, t: f32) -> Vec3A {
-        self.tl + self.right * s + self.down * t + self.twist * (s * t)
+        self.plane_point_lanes(s, t)
+    }
+
+    /// [`Camera::plane_point`] over any lanes.
+    #[inline(always)]
+    pub fn plane_point_lanes<V: Vector3>(&self, s: V::F, t: V::F) -> V {
+        let v = V::broadcast;
+        v(self.tl) + v(self.right).scale(s) + v(self.down).scale(t) + v(self.twist).scale(s * t)
     }
 
     /// Ray through pixel (x, y) at offset `u` in [0,1)² inside the pixel; a thin lens's from

@@ -31,6 +31,7 @@ pub mod rgbe;
 pub mod sampler;
 pub mod scene;
 pub mod session;
+pub mod simd;
 pub mod texture;
 
 use integrator::{IntegratorKind, IntegratorParams, RussianRoulette};

@@ -1,32 +1,37 @@
 //! Orthonormal shading frames: BSDFs work in a local frame whose z axis is the normal.
 
+use crate::simd::{Float, Vector3};
 use glam::Vec3A;
 
+/// A frame of vectors `V`: glam's `Vec3A` for one path, or lanes of them
+/// ([`crate::simd`]).
 #[derive(Clone, Copy, Debug)]
-pub struct Frame {
-    pub s: Vec3A,
-    pub t: Vec3A,
-    pub n: Vec3A,
+pub struct Frame<V = Vec3A> {
+    pub s: V,
+    pub t: V,
+    pub n: V,
 }
 
-impl Frame {
+impl<V: Vector3> Frame<V> {
     /// Builds a frame around the unit vector `n` without branches on its direction:
     /// Duff et al., "Building an Orthonormal Basis, Revisited", JCGT 6(1), 2017.
-    #[inline]
-    pub fn from_normal(n: Vec3A) -> Self {
-        let sign = 1.0f32.copysign(n.z);
-        let a = -1.0 / (sign + n.z);
-        let b = n.x * n.y * a;
-        let s = Vec3A::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
-        let t = Vec3A::new(b, sign + n.y * n.y * a, -n.y);
+    #[inline(always)]
+    pub fn from_normal(n: V) -> Self {
+        let (x, y, z) = (n.x(), n.y(), n.z());
+        let one = V::F::splat(1.0);
+        let sign = one.copysign(z);
+        let a = V::F::splat(-1.0) / (sign + z);
+        let b = x * y * a;
+        let s = V::new(one + sign * x * x * a, sign * b, -sign * x);
+        let t = V::new(b, sign + y * y * a, -y);
         Frame { s, t, n }
     }
-    #[inline]
-    pub fn to_local(&self, v: Vec3A) -> Vec3A {
-        Vec3A::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
+    #[inline(always)]
+    pub fn to_local(&self, v: V) -> V {
+        V::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
     }
-    #[inline]
-    pub fn to_world(&self, v: Vec3A) -> Vec3A {
-        self.s * v.x + self.t * v.y + self.n * v.z
+    #[inline(always)]
+    pub fn to_world(&self, v: V) -> V {
+        self.s.scale(v.x()) + self.t.scale(v.y()) + self.n.scale(v.z())
     }
 }

@@ -6,6 +6,7 @@
 //! point pushed along the geometric normal by that bound (so the offset scales with the
 //! magnitude of the coordinates, never a fixed epsilon), then rounded away from the surface.
 
+use crate::simd::{Float, Vector3};
 use glam::Vec3A;
 
 #[derive(Clone, Copy, Debug)]
@@ -42,14 +43,21 @@ pub const fn gamma(n: i32) -> f32 {
 /// (branch-free, and this runs for every shadow ray): rounding the sum moves the point by at
 /// most half an ulp per coordinate, at most γ(1)·Σ|nᵢ||pᵢ| along n, while every shape's
 /// bound has d ≥ γ(5)·Σ|nᵢ||pᵢ| (triangles γ(7), spheres γ(5)), so the extra d covers it.
-#[inline]
-pub fn offset_ray_origin(p: Vec3A, p_err: Vec3A, n: Vec3A, w: Vec3A) -> Vec3A {
-    let offset = n * (2.0 * n.abs().dot(p_err));
-    if w.dot(n) < 0.0 {
-        p - offset
-    } else {
-        p + offset
-    }
+#[inline(always)]
+pub fn offset_ray_origin<V: Vector3>(p: V, p_err: V, n: V, w: V) -> V {
+    offset_by(p, offset_push(n, p_err), n, w)
+}
+
+/// [`offset_ray_origin`]'s push off the surface: n·2(|n|·p_err).
+#[inline(always)]
+pub fn offset_push<V: Vector3>(n: V, p_err: V) -> V {
+    n.scale(V::F::splat(2.0) * n.abs().dot(p_err))
+}
+
+/// [`offset_ray_origin`] with its push `off`: `p` moved to the side of `n` that `w` points to.
+#[inline(always)]
+pub fn offset_by<V: Vector3>(p: V, off: V, n: V, w: V) -> V {
+    V::select(w.dot(n).lt(V::F::zero()), p - off, p + off)
 }
 
 /// Fraction of a shadow ray's length left unchecked at its far end, so the ray does not

@@ -1,7 +1,7 @@
 //! Analytic spheres, intersected with the numerically robust quadratic.
 
 use super::ray::{gamma, Ray};
-use super::sqrt4;
+use crate::simd::{Float, Mask, Vector3, V3};
 use glam::{Vec3A, Vec4};
 
 #[derive(Clone, Copy, Debug)]
@@ -33,33 +33,12 @@ impl Sphere {
     /// Gems, ch. 7, 2019); the roots then come from the stable form q = −b − sign(b)√Δ.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<f32> {
-        let f = ray.o - self.center;
-        let a = ray.d.length_squared();
-        let b = -f.dot(ray.d);
-        let l = f + (b / a) * ray.d;
-        let disc = a * (self.radius * self.radius - l.length_squared());
-        if disc < 0.0 {
+        let r2 = self.radius * self.radius;
+        let (hit, t) = intersect_lanes(self.center, r2, ray.o, ray.d, t_max);
+        if !hit {
             return None;
         }
-        let sq = disc.sqrt();
-        let c = f.length_squared() - self.radius * self.radius;
-        let q = b + sq.copysign(b);
-        let (mut t0, mut t1) = (c / q, q / a);
-        if q == 0.0 {
-            // Ray through the centre from the centre itself: both roots are ±r/|d|.
-            t0 = -sq / a;
-            t1 = sq / a;
-        }
-        if t0 > t1 {
-            std::mem::swap(&mut t0, &mut t1);
-        }
-        if t0 > 0.0 && t0 < t_max {
-            Some(t0)
-        } else if t1 > 0.0 && t1 < t_max {
-            Some(t1)
-        } else {
-            None
-        }
+        Some(t)
     }
 
     /// Whether [`Sphere::intersect`] finds a hit for each of four rays from one origin `o`
@@ -68,43 +47,69 @@ impl Sphere {
     /// `intersect(..).is_some()` for its ray. For shadow-ray packets.
     #[inline(always)]
     pub fn occludes4(&self, o: Vec3A, d: [Vec4; 3], t_max: Vec4) -> u32 {
-        let f = o - self.center;
-        let fs = [Vec4::splat(f.x), Vec4::splat(f.y), Vec4::splat(f.z)];
-        let dot = |x: &[Vec4; 3], y: &[Vec4; 3]| (x[0] * y[0] + x[1] * y[1]) + x[2] * y[2];
-        let a = dot(&d, &d);
-        let b = -dot(&fs, &d);
-        let ba = b / a;
-        let l: [Vec4; 3] = std::array::from_fn(|k| fs[k] + ba * d[k]);
         let r2 = Vec4::splat(self.radius * self.radius);
-        let disc = a * (r2 - dot(&l, &l));
-        // Lanes with a negative (or NaN) discriminant miss: their square root is NaN, which
-        // fails every comparison below.
-        let sq = sqrt4(disc);
-        let c = Vec4::splat(f.length_squared() - self.radius * self.radius);
-        let q = b + sq.copysign(b);
-        let centre = q.cmpeq(Vec4::ZERO);
-        let t0 = Vec4::select(centre, -sq / a, c / q);
-        let t1 = Vec4::select(centre, sq / a, q / a);
-        let swap = t0.cmpgt(t1);
-        let (t0, t1) = (Vec4::select(swap, t1, t0), Vec4::select(swap, t0, t1));
-        let zero = Vec4::ZERO;
-        let hit = (t0.cmpgt(zero) & t0.cmplt(t_max)) | (t1.cmpgt(zero) & t1.cmplt(t_max));
-        (hit & disc.cmpge(zero)).bitmask()
+        let (o, c) = (V3::broadcast(o), V3::broadcast(self.center));
+        let d = V3::new(d[0], d[1], d[2]);
+        intersect_lanes(c, r2, o, d, t_max).0.bitmask()
     }
 
     /// The hit point reprojected onto the surface, its outward unit normal and its error bound
     /// (pbrt-v4 §6.8.5: reprojection leaves an error of γ(5) of the coordinates' magnitude).
     #[inline]
     pub fn surface_point(&self, p_approx: Vec3A) -> (Vec3A, Vec3A, Vec3A) {
-        let n = (p_approx - self.center).normalize();
-        let p = self.center + n * self.radius;
-        let err = (self.center.abs() + (n * self.radius).abs()) * gamma(5);
-        (p, n, err)
+        surface_point(self.center, self.radius, p_approx)
     }
 
     pub fn area(&self) -> f32 {
         4.0 * std::f32::consts::PI * self.radius * self.radius
     }
+}
+
+/// [`Sphere::intersect`] over any lanes, for the sphere of `center` and squared radius `r2`:
+/// the lanes that hit in (0, `t_max`), and there the nearer such root.
+#[inline(always)]
+pub fn intersect_lanes<V: Vector3>(
+    center: V,
+    r2: V::F,
+    o: V,
+    d: V,
+    t_max: V::F,
+) -> (Mask<V>, V::F) {
+    let zero = V::F::zero();
+    let f = o - center;
+    let a = d.dot(d);
+    let b = -f.dot(d);
+    let l = f + d.scale(b / a);
+    let disc = a * (r2 - l.dot(l));
+    // A negative discriminant misses (a NaN one fails every comparison below).
+    let real = !disc.lt(zero);
+    if !V::F::any(real) {
+        return (real, zero);
+    }
+    let sq = disc.sqrt();
+    let c = f.dot(f) - r2;
+    let q = b + sq.copysign(b);
+    let (mut t0, mut t1) = (c / q, q / a);
+    // q = 0: a ray through the centre from the centre itself; both roots are ±r/|d|.
+    let centre = q.eq(zero);
+    if V::F::any(centre) {
+        t0 = V::F::select(centre, -sq / a, t0);
+        t1 = V::F::select(centre, sq / a, t1);
+    }
+    let swap = t0.gt(t1);
+    let (t0, t1) = (V::F::select(swap, t1, t0), V::F::select(swap, t0, t1));
+    let first = t0.gt(zero) & t0.lt(t_max);
+    let second = t1.gt(zero) & t1.lt(t_max);
+    (real & (first | second), V::F::select(first, t0, t1))
+}
+
+/// [`Sphere::surface_point`] over any lanes, for the sphere of `center` and `radius`.
+#[inline(always)]
+pub fn surface_point<V: Vector3>(center: V, radius: V::F, p_approx: V) -> (V, V, V) {
+    let n = (p_approx - center).normalize();
+    let p = center + n.scale(radius);
+    let err = (center.abs() + n.scale(radius).abs()).scale(V::F::splat(gamma(5)));
+    (p, n, err)
 }
 
 #[cfg(test)]

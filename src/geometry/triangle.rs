@@ -1,6 +1,7 @@
 //! Triangles and the Möller–Trumbore ray–triangle test.
 
 use super::ray::{gamma, Ray};
+use crate::simd::{Float, Vector3};
 use glam::{DVec3, Vec3A, Vec4};
 
 /// A triangle stored by its vertices (Möller and Trumbore, "Fast, Minimum Storage
@@ -180,10 +181,7 @@ impl Triangle {
     /// (pbrt-v4 §6.8.4: γ(7) times the sum of the magnitudes of the weighted vertices).
     #[inline]
     pub fn point(&self, u: f32, v: f32) -> (Vec3A, Vec3A) {
-        let w = 1.0 - u - v;
-        let p = self.p0 * w + self.p1 * u + self.p2 * v;
-        let err = ((self.p0 * w).abs() + (self.p1 * u).abs() + (self.p2 * v).abs()) * gamma(7);
-        (p, err)
+        barycentric_point(self.p0, self.p1, self.p2, u, v)
     }
 
     /// Uniform point on the triangle from two uniform numbers (the square-root
@@ -193,6 +191,15 @@ impl Triangle {
         let su = u.x.sqrt();
         (1.0 - su, u.y * su)
     }
+}
+
+/// [`Triangle::point`] over any lanes, for the vertices `p0`, `p1`, `p2`.
+#[inline(always)]
+pub fn barycentric_point<V: Vector3>(p0: V, p1: V, p2: V, u: V::F, v: V::F) -> (V, V) {
+    let w = V::F::splat(1.0) - u - v;
+    let (a, b, c) = (p0.scale(w), p1.scale(u), p2.scale(v));
+    let err = (a.abs() + b.abs() + c.abs()).scale(V::F::splat(gamma(7)));
+    (a + b + c, err)
 }
 
 #[cfg(test)]

@@ -23,6 +23,9 @@
 mod lanes;
 mod planar;
 
+#[cfg(target_arch = "x86_64")]
+pub(super) use planar::{lambert_weight, shadow_dir, wrap};
+
 use crate::accel::{ShadowPacket, PACKET};
 use crate::geometry::{Frame, Ray};
 use crate::material::sampling::power_heuristic;

@@ -15,6 +15,7 @@ pub mod envmap;
 pub mod spot;
 
 use crate::geometry::{ray::gamma, Sphere, Triangle};
+use crate::simd::{Float, Vector3};
 use crate::texture::Texture;
 use crate::Color;
 use distribution::Distribution1D;
@@ -159,14 +160,16 @@ impl AreaLight {
     #[inline]
     pub fn sample_point(&self, u: Vec2) -> (Vec3A, Vec3A, Vec3A) {
         match &self.shape {
-            LightShape::Triangle(t) => {
-                let (bu, bv) = Triangle::sample_uniform(u);
-                let p = t.p0 * (1.0 - bu - bv) + t.p1 * bu + t.p2 * bv;
-                (p, self.normal, self.err)
-            }
-            LightShape::Parallelogram { p0, e1, e2 } => {
-                (*p0 + *e1 * u.x + *e2 * u.y, self.normal, self.err)
-            }
+            LightShape::Triangle(t) => (
+                planar_point(t.p0, t.p1, t.p2, true, u.x, u.y),
+                self.normal,
+                self.err,
+            ),
+            LightShape::Parallelogram { p0, e1, e2 } => (
+                planar_point(*p0, *e1, *e2, false, u.x, u.y),
+                self.normal,
+                self.err,
+            ),
             LightShape::Sphere(s) => {
                 let n = crate::material::sampling::square_to_uniform_sphere(u);
                 let p = s.center + n * s.radius;
@@ -176,6 +179,46 @@ impl AreaLight {
             }
         }
     }
+}
+
+/// A point of a planar light, over any lanes: `a·(1 − u' − v') + b·u' + c·v'` with the
+/// uniform barycentric (u', v') of (u, v) for a triangle (`a, b, c` its vertices; the
+/// square-root parameterisation, Shirley and Chiu 1997), `a + b·u + c·v` for a parallelogram
+/// (`a` a corner, `b`, `c` its edges).
+#[inline(always)]
+pub fn planar_point<V: Vector3>(a: V, b: V, c: V, triangle: bool, u: V::F, v: V::F) -> V {
+    if triangle {
+        let one = V::F::splat(1.0);
+        let su = u.sqrt();
+        let (bu, bv) = (one - su, v * su);
+        a.scale(one - bu - bv) + b.scale(bu) + c.scale(bv)
+    } else {
+        a + b.scale(u) + c.scale(v)
+    }
+}
+
+/// From `p` towards the light point `pl` (unit normal `n`, on a light of area `area` chosen
+/// with probability `pmf`), over any lanes: the offset `pl − p`, its squared length, the unit
+/// direction, the cosine at the light and the solid-angle density of the sample (which counts
+/// only where the distance and the cosine are positive).
+#[inline(always)]
+pub fn towards<V: Vector3>(p: V, pl: V, n: V, pmf: V::F, area: V::F) -> (V, V::F, V, V::F, V::F) {
+    let d = pl - p;
+    let dist2 = d.dot(d);
+    let wi = d.div(dist2.sqrt());
+    let cos_l = -n.dot(wi);
+    (d, dist2, wi, cos_l, pmf * dist2 / (cos_l * area))
+}
+
+/// [`Lights::pdf`] over any lanes: the solid-angle density at `p` of sampling `pl` (normal
+/// `n`) on a light of area `area` chosen with probability `pmf`; 0 from behind.
+#[inline(always)]
+pub fn area_pdf<V: Vector3>(p: V, pl: V, n: V, pmf: V::F, area: V::F) -> V::F {
+    let zero = V::F::zero();
+    let d = pl - p;
+    let dist2 = d.dot(d);
+    let cos_l = (-n.dot(d)).max_num(zero) / dist2.sqrt();
+    V::F::select(cos_l.le(zero), zero, pmf * dist2 / (cos_l * area))
 }
 
 /// `AreaLight::texture` of a light with constant radiance.
@@ -278,7 +321,7 @@ impl PlanarLight {
             c,
             triangle,
             normal: l.normal,
-            offset: l.normal * (2.0 * l.normal.abs().dot(l.err)),
+            offset: crate::geometry::ray::offset_push(l.normal, l.err),
             area: l.area,
             radiance: l.radiance,
         })
@@ -411,17 +454,11 @@ impl Lights {
             return self.sample_other(id - self.lights.len(), pmf, p, u);
         };
         let (pl, n, p_err) = light.sample_point(u);
-        let d = pl - p;
-        let dist2 = d.length_squared();
-        if dist2 == 0.0 {
+        let (_, dist2, wi, cos_l, pdf) = towards(p, pl, n, pmf, light.area);
+        // (cos_l ≤ 0: the back of a one-sided emitter.)
+        if dist2 == 0.0 || cos_l <= 0.0 {
             return None;
         }
-        let wi = d / dist2.sqrt();
-        let cos_l = -n.dot(wi);
-        if cos_l <= 0.0 {
-            return None; // the back of a one-sided emitter
-        }
-        let pdf = pmf * dist2 / (cos_l * light.area);
         Some(LightSample {
             p: pl,
             n,
@@ -520,14 +557,8 @@ impl Lights {
     /// (normal `n`) on light `id` from `p`. Used for multiple importance sampling.
     #[inline]
     pub fn pdf(&self, id: u32, p: Vec3A, pl: Vec3A, n: Vec3A) -> f32 {
-        let d = pl - p;
-        let dist2 = d.length_squared();
-        let cos_l = (-n.dot(d)).max(0.0) / dist2.sqrt();
-        if cos_l <= 0.0 {
-            return 0.0;
-        }
         let light = &self.lights[id as usize];
-        self.distribution.pmf(id as usize) * dist2 / (cos_l * light.area)
+        area_pdf(p, pl, n, self.distribution.pmf(id as usize), light.area)
     }
 
     pub fn total_power(&self) -> f32 {

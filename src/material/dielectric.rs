@@ -5,6 +5,7 @@
 
 use super::mirror::reflect_local;
 use super::{BsdfSample, TransportMode};
+use crate::simd::{Float, Mask, Vector3};
 use crate::Color;
 use glam::Vec3A;
 
@@ -22,21 +23,27 @@ pub struct Dielectric {
 /// inside over outside; a negative `cos_i` means the light arrives from inside.
 #[inline]
 pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
-    let mut cos_i = cos_i.clamp(-1.0, 1.0);
-    let mut eta = eta;
-    if cos_i < 0.0 {
-        eta = 1.0 / eta;
-        cos_i = -cos_i;
-    }
-    let sin2_i = 1.0 - cos_i * cos_i;
+    fresnel_dielectric_lanes(cos_i, eta)
+}
+
+/// [`fresnel_dielectric`] over any lanes.
+#[inline(always)]
+pub fn fresnel_dielectric_lanes<T: Float>(cos_i: T, eta: T) -> T {
+    let one = T::splat(1.0);
+    // `f32::clamp(-1, 1)`, NaN kept.
+    let c = T::select(cos_i.lt(-one), -one, cos_i);
+    let c = T::select(c.gt(one), one, c);
+    let inside = c.lt(T::zero());
+    let eta = T::select(inside, one / eta, eta);
+    let c = T::select(inside, -c, c);
+    let sin2_i = one - c * c;
     let sin2_t = sin2_i / (eta * eta);
-    if sin2_t >= 1.0 {
-        return 1.0; // total internal reflection
-    }
-    let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
-    let r_parl = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    let r_perp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    0.5 * (r_parl * r_parl + r_perp * r_perp)
+    let cos_t = (one - sin2_t).max_num(T::zero()).sqrt();
+    let r_parl = (eta * c - cos_t) / (eta * c + cos_t);
+    let r_perp = (c - eta * cos_t) / (c + eta * cos_t);
+    let f = T::splat(0.5) * (r_parl * r_parl + r_perp * r_perp);
+    // Total internal reflection.
+    T::select(sin2_t.ge(one), one, f)
 }
 
 /// Fresnel reflectance together with what refraction needs, as Mitsuba's `fresnel`:
@@ -60,19 +67,29 @@ pub fn fresnel_refraction(cos_i: f32, eta: f32) -> (f32, f32, f32, f32) {
 /// Returns the transmitted direction and the relative index η_t/η_i actually crossed.
 #[inline]
 pub fn refract_local(wi: Vec3A, eta: f32) -> Option<(Vec3A, f32)> {
-    let (mut cos_i, mut eta, mut n) = (wi.z, eta, Vec3A::Z);
-    if cos_i < 0.0 {
-        eta = 1.0 / eta;
-        cos_i = -cos_i;
-        n = -n;
-    }
-    let sin2_i = (1.0 - cos_i * cos_i).max(0.0);
-    let sin2_t = sin2_i / (eta * eta);
-    if sin2_t >= 1.0 {
+    let (w, eta, ok) = refract(wi, eta);
+    if !ok {
         return None;
     }
-    let cos_t = (1.0 - sin2_t).sqrt();
-    Some((-wi / eta + (cos_i / eta - cos_t) * n, eta))
+    Some((w, eta))
+}
+
+/// [`refract_local`] over any lanes: the direction, the index crossed, and the lanes where
+/// it exists (no total internal reflection).
+#[inline(always)]
+pub fn refract<V: Vector3>(wi: V, eta: V::F) -> (V, V::F, Mask<V>) {
+    let (zero, one) = (V::F::zero(), V::F::splat(1.0));
+    let inside = wi.z().lt(zero);
+    let eta = V::F::select(inside, one / eta, eta);
+    let cos_i = V::F::select(inside, -wi.z(), wi.z());
+    // The normal, +z or −z (whose x and y are −0, as `-Vec3A::Z` has them).
+    let nxy = V::F::select(inside, V::F::splat(-0.0), zero);
+    let n = V::new(nxy, nxy, V::F::select(inside, -one, one));
+    let sin2_i = (one - cos_i * cos_i).max_num(zero);
+    let sin2_t = sin2_i / (eta * eta);
+    let cos_t = (one - sin2_t).sqrt();
+    let w = (-wi).div(eta) + n.scale(cos_i / eta - cos_t);
+    (w, eta, !sin2_t.ge(one))
 }
 
 impl Dielectric {
@@ -87,17 +104,19 @@ impl Dielectric {
 
     #[inline]
     pub fn sample(&self, wo: Vec3A, u: f32, mode: TransportMode) -> Option<BsdfSample> {
-        let f = fresnel_dielectric(wo.z, self.eta);
-        if u < f {
+        let (wi, reflects, etap, ok) = sample(wo, self.eta, u);
+        if !ok {
+            return None;
+        }
+        if reflects {
             return Some(BsdfSample {
-                wi: reflect_local(wo),
+                wi,
                 weight: self.specular_reflectance,
                 pdf: 0.0,
                 specular: true,
                 eta: 1.0,
             });
         }
-        let (wi, etap) = refract_local(wo, self.eta)?;
         // Radiance is compressed into the smaller solid angle of the denser medium: it
         // scales by 1/η² across the interface (Veach 1997 §5.2; pbrt-v4 §9.5.2).
         let scale = match mode {
@@ -112,4 +131,16 @@ impl Dielectric {
             eta: etap,
         })
     }
+}
+
+/// [`Dielectric::sample`]'s choice over any lanes, `u` uniform: reflection with probability
+/// F, else refraction. The direction, the lanes that reflect, the relative index crossed
+/// where refracting, and the lanes with a sample (none where refraction would be total
+/// internal reflection).
+#[inline(always)]
+pub fn sample<V: Vector3>(wo: V, eta: V::F, u: V::F) -> (V, Mask<V>, V::F, Mask<V>) {
+    let reflects = u.lt(fresnel_dielectric_lanes(wo.z(), eta));
+    let (refracted, etap, refracts) = refract(wo, eta);
+    let wi = V::select(reflects, reflect_local(wo), refracted);
+    (wi, reflects, etap, reflects | refracts)
 }

@@ -1,6 +1,7 @@
 //! The perfect mirror: a delta BSDF that reflects a fraction `reflectance` of the light.
 
 use super::BsdfSample;
+use crate::simd::Vector3;
 use crate::Color;
 use glam::Vec3A;
 
@@ -9,9 +10,10 @@ pub struct Mirror {
     pub reflectance: Color,
 }
 
-#[inline]
-pub fn reflect_local(wo: Vec3A) -> Vec3A {
-    Vec3A::new(-wo.x, -wo.y, wo.z)
+/// The mirror direction of `wo` about the local normal +z, over any lanes.
+#[inline(always)]
+pub fn reflect_local<V: Vector3>(wo: V) -> V {
+    V::new(-wo.x(), -wo.y(), wo.z())
 }
 
 impl Mirror {

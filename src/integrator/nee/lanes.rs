@@ -4,28 +4,18 @@
 //! (no fused multiply-add, no approximations), so a lane's value does not depend on the
 //! width it was computed at.
 
+use crate::simd::Float;
 use glam::{BVec4A, Vec4};
-use std::ops::{Add, BitAnd, Div, Mul, Sub};
 
-/// A vector of `N` f32 lanes.
-pub(super) trait Lanes:
-    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self>
-{
+/// A vector of `N` f32 lanes ([`Float`]) that loads, stores and counts.
+pub(super) trait Lanes: Float {
     const N: usize;
-    type Mask: Copy + BitAnd<Output = Self::Mask>;
-    fn splat(x: f32) -> Self;
     /// Lanes `0..N` of `s`.
     fn load(s: &[f32]) -> Self;
     /// Into `s[0..N]`.
     fn store(self, s: &mut [f32]);
     /// 0, 1, …, N − 1.
     fn index() -> Self;
-    fn sqrt(self) -> Self;
-    fn lt(self, o: Self) -> Self::Mask;
-    fn gt(self, o: Self) -> Self::Mask;
-    fn ge(self, o: Self) -> Self::Mask;
-    /// `a` where `m` is set, else `b`.
-    fn select(m: Self::Mask, a: Self, b: Self) -> Self;
     /// Bit l set where lane l of `m` is.
     fn bits(m: Self::Mask) -> u32;
     /// The mask of the low `N` bits of `b`.
@@ -48,11 +38,6 @@ static MASKS4: [BVec4A; 16] = {
 
 impl Lanes for Vec4 {
     const N: usize = 4;
-    type Mask = BVec4A;
-    #[inline(always)]
-    fn splat(x: f32) -> Self {
-        Vec4::splat(x)
-    }
     #[inline(always)]
     fn load(s: &[f32]) -> Self {
         Vec4::from_slice(s)
@@ -64,26 +49,6 @@ impl Lanes for Vec4 {
     #[inline(always)]
     fn index() -> Self {
         Vec4::new(0.0, 1.0, 2.0, 3.0)
-    }
-    #[inline(always)]
-    fn sqrt(self) -> Self {
-        crate::geometry::sqrt4(self)
-    }
-    #[inline(always)]
-    fn lt(self, o: Self) -> BVec4A {
-        self.cmplt(o)
-    }
-    #[inline(always)]
-    fn gt(self, o: Self) -> BVec4A {
-        self.cmpgt(o)
-    }
-    #[inline(always)]
-    fn ge(self, o: Self) -> BVec4A {
-        self.cmpge(o)
-    }
-    #[inline(always)]
-    fn select(m: BVec4A, a: Self, b: Self) -> Self {
-        Vec4::select(m, a, b)
     }
     #[inline(always)]
     fn bits(m: BVec4A) -> u32 {
@@ -109,9 +74,10 @@ mod avx {
     //! has AVX (checked at run time by the caller); they are `inline(always)` so that they
     //! are compiled into that function.
     use super::Lanes;
+    use crate::simd::Float;
     use glam::Vec4;
     use std::arch::x86_64::*;
-    use std::ops::{Add, BitAnd, Div, Mul, Sub};
+    use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
     #[derive(Clone, Copy)]
     pub struct F8(__m256);
@@ -136,16 +102,97 @@ mod avx {
     binary!(F8, Mul, mul, _mm256_mul_ps);
     binary!(F8, Div, div, _mm256_div_ps);
     binary!(M8, BitAnd, bitand, _mm256_and_ps);
+    binary!(M8, BitOr, bitor, _mm256_or_ps);
+
+    /// The sign bit of each lane.
+    #[inline(always)]
+    fn sign_bits() -> __m256 {
+        // SAFETY: see the module's comment.
+        unsafe { _mm256_set1_ps(-0.0) }
+    }
+
+    impl Neg for F8 {
+        type Output = F8;
+        #[inline(always)]
+        fn neg(self) -> F8 {
+            // SAFETY: see the module's comment.
+            F8(unsafe { _mm256_xor_ps(self.0, sign_bits()) })
+        }
+    }
+
+    impl Not for M8 {
+        type Output = M8;
+        #[inline(always)]
+        fn not(self) -> M8 {
+            // SAFETY: see the module's comment.
+            M8(unsafe { _mm256_xor_ps(self.0, _mm256_castsi256_ps(_mm256_set1_epi32(-1))) })
+        }
+    }
 
     // SAFETY (every `unsafe` below): see the module's comment; loads and stores check their
     // slice's length first.
-    impl Lanes for F8 {
-        const N: usize = 8;
+    impl Float for F8 {
         type Mask = M8;
         #[inline(always)]
         fn splat(x: f32) -> Self {
             F8(unsafe { _mm256_set1_ps(x) })
         }
+        #[inline(always)]
+        fn sqrt(self) -> Self {
+            F8(unsafe { _mm256_sqrt_ps(self.0) })
+        }
+        #[inline(always)]
+        fn abs(self) -> Self {
+            F8(unsafe { _mm256_andnot_ps(sign_bits(), self.0) })
+        }
+        #[inline(always)]
+        fn max_num(self, o: Self) -> Self {
+            F8(unsafe { _mm256_max_ps(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn min_num(self, o: Self) -> Self {
+            F8(unsafe { _mm256_min_ps(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn copysign(self, sign: Self) -> Self {
+            let s = sign_bits();
+            F8(unsafe { _mm256_or_ps(_mm256_and_ps(sign.0, s), _mm256_andnot_ps(s, self.0)) })
+        }
+        // Ordered, non-signalling comparisons: false where either operand is NaN, as
+        // SSE's `cmpltps` and friends.
+        #[inline(always)]
+        fn lt(self, o: Self) -> M8 {
+            M8(unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn le(self, o: Self) -> M8 {
+            M8(unsafe { _mm256_cmp_ps::<_CMP_LE_OQ>(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn gt(self, o: Self) -> M8 {
+            M8(unsafe { _mm256_cmp_ps::<_CMP_GT_OQ>(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn ge(self, o: Self) -> M8 {
+            M8(unsafe { _mm256_cmp_ps::<_CMP_GE_OQ>(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn eq(self, o: Self) -> M8 {
+            M8(unsafe { _mm256_cmp_ps::<_CMP_EQ_OQ>(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn select(m: M8, a: Self, b: Self) -> Self {
+            // blendv takes its second operand where the mask's sign bit is set.
+            F8(unsafe { _mm256_blendv_ps(b.0, a.0, m.0) })
+        }
+        #[inline(always)]
+        fn any(m: M8) -> bool {
+            unsafe { _mm256_movemask_ps(m.0) != 0 }
+        }
+    }
+
+    impl Lanes for F8 {
+        const N: usize = 8;
         #[inline(always)]
         fn load(s: &[f32]) -> Self {
             let s = &s[..8];
@@ -159,29 +206,6 @@ mod avx {
         #[inline(always)]
         fn index() -> Self {
             F8(unsafe { _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0) })
-        }
-        #[inline(always)]
-        fn sqrt(self) -> Self {
-            F8(unsafe { _mm256_sqrt_ps(self.0) })
-        }
-        // Ordered, non-signalling comparisons: false where either operand is NaN, as
-        // SSE's `cmpltps` and friends.
-        #[inline(always)]
-        fn lt(self, o: Self) -> M8 {
-            M8(unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(self.0, o.0) })
-        }
-        #[inline(always)]
-        fn gt(self, o: Self) -> M8 {
-            M8(unsafe { _mm256_cmp_ps::<_CMP_GT_OQ>(self.0, o.0) })
-        }
-        #[inline(always)]
-        fn ge(self, o: Self) -> M8 {
-            M8(unsafe { _mm256_cmp_ps::<_CMP_GE_OQ>(self.0, o.0) })
-        }
-        #[inline(always)]
-        fn select(m: M8, a: Self, b: Self) -> Self {
-            // blendv takes its second operand where the mask's sign bit is set.
-            F8(unsafe { _mm256_blendv_ps(b.0, a.0, m.0) })
         }
         #[inline(always)]
         fn bits(m: M8) -> u32 {

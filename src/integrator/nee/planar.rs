@@ -13,12 +13,13 @@
 use super::lanes::Lanes;
 use super::{RayStats, BATCH};
 use crate::accel::{ShadowPacket, PACKET};
-use crate::geometry::ray::{offset_ray_origin, SHADOW_EPSILON};
+use crate::geometry::ray::{offset_by, offset_ray_origin, SHADOW_EPSILON};
 use crate::geometry::Frame;
-use crate::light::PlanarLight;
+use crate::light::{planar_point, PlanarLight};
 use crate::material::sampling::power_heuristic;
 use crate::material::{Bsdf, Material};
 use crate::scene::{Interaction, Scene};
+use crate::simd::{Float, Mask, Vector3, V3};
 use crate::Color;
 use glam::{Vec3A, Vec4};
 use std::f32::consts::{FRAC_1_PI, PI};
@@ -71,9 +72,49 @@ unsafe fn planar_avx<const LAMBERT: bool>(v: &Vertex, stats: &mut RayStats) -> C
 
 /// (Δ + offset) mod 1 for Δ and offsets in [0, 1): one subtraction, exact by Sterbenz's lemma.
 #[inline(always)]
-fn wrap<V: Lanes>(x: V) -> V {
-    let one = V::splat(1.0);
-    V::select(x.ge(one), x - one, x)
+pub(crate) fn wrap<T: Float>(x: T) -> T {
+    let one = T::splat(1.0);
+    T::select(x.ge(one), x - one, x)
+}
+
+/// A Lambertian vertex's weight for the light point at offset `d` from it (`dist2` its
+/// squared length), over the light pdf and without ρ/π: the power heuristic's, in the form
+/// that spares the divider. With f·|cos| = (ρ/π)·c and p_bsdf = c/π, c the cosine on the lit
+/// side, and p_light = r²/(cos_l·A), the power heuristic's weight over p_light,
+/// c·(n·p_light)²/((n·p_light)² + p_bsdf²)/p_light, is n²π²·t/(n²π² + t²) (`k` = n²π²) with
+/// t = c·cos_l·A/r² = (c·r)(cos_l·A·r)/(r²)²: no square root, one division for 1/r² and one
+/// for the weight; finite, and 0 where t is (a light seen edge-on), as the limit is. Also the
+/// lanes where the light and the surface face each other. `nl` is the light's normal, `ns`
+/// the shading normal, `side` ±1 the side the path is on.
+#[inline(always)]
+pub(crate) fn lambert_weight<V: Vector3>(
+    d: V,
+    dist2: V::F,
+    (nl, neg_area): (V, V::F),
+    (ns, side): (V, V::F),
+    k: V::F,
+) -> (Mask<V>, V::F) {
+    let zero = V::F::zero();
+    let a_l = nl.dot(d) * neg_area; // cos_l·A·r
+    let a_s = ns.dot(d) * side; // c·r
+    let inv = V::F::splat(1.0) / dist2;
+    let t = (a_l * a_s) * (inv * inv);
+    (a_l.gt(zero) & a_s.gt(zero), (k * t) / (k + t * t))
+}
+
+/// The shadow ray to light point `q` (the light's normal `nl`, its push `off`): from the
+/// origin on the side it leaves (`below` where `under`, else `above`) to `q` pushed off the
+/// light towards it (`offset_ray_origin` at both ends); its direction, to be clear up to
+/// 1 − `SHADOW_EPSILON`.
+#[inline(always)]
+pub(crate) fn shadow_dir<V: Vector3>(
+    q: V,
+    (nl, off): (V, V),
+    under: Mask<V>,
+    (above, below): (V, V),
+) -> V {
+    let o = V::select(under, below, above);
+    offset_by(q, off, nl, o - q) - o
 }
 
 /// The batch over lanes `V`. The estimator is the general path's (`AreaLight::sample_point`,
@@ -103,14 +144,13 @@ fn planar_in<V: Lanes, const LAMBERT: bool>(vx: &Vertex, stats: &mut RayStats) -
         offset_ray_origin(p, si.p_err, si.ng, si.ng),
         offset_ray_origin(p, si.p_err, si.ng, -si.ng),
     ];
-    let sp = |v: Vec3A| [V::splat(v.x), V::splat(v.y), V::splat(v.z)];
+    let sp = V3::<V>::broadcast;
     let (a, b, c) = (sp(light.a), sp(light.b), sp(light.c));
     let (nl, off) = (sp(light.normal), sp(light.offset));
     // (−n_l·x is n_l·x negated exactly: each product and sum only changes sign.)
     let nl_neg = sp(-light.normal);
     let (ps, ns, ng) = (sp(p), sp(frame.n), sp(si.ng));
     let (o_above, o_below) = (sp(origins[0]), sp(origins[1]));
-    let dot = |x: &[V; 3], y: &[V; 3]| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
     let (du, dv) = (V::splat(delta[0]), V::splat(delta[1]));
     let nf = n as f32;
     let (inv_n, area, neg_area) = (
@@ -120,6 +160,7 @@ fn planar_in<V: Lanes, const LAMBERT: bool>(vx: &Vertex, stats: &mut RayStats) -
     );
     let (zero, one) = (V::splat(0.0), V::splat(1.0));
     let side = V::splat(side);
+    let n2pi2 = V::splat(nf * nf * PI * PI);
     let mut acc = Vec4::ZERO;
     let mut sum = Color::ZERO;
     let mut i = 0;
@@ -144,57 +185,34 @@ fn planar_in<V: Lanes, const LAMBERT: bool>(vx: &Vertex, stats: &mut RayStats) -
             let u = wrap(du + jv * inv_n);
             let k = (j % 256) as usize;
             let v = wrap(dv + V::load(&LATTICE_V[k..]));
-            // The point's weights: (1, u, v), or a triangle's (Triangle::sample_uniform).
-            let (w0, w1, w2) = if light.triangle {
-                let su = u.sqrt();
-                let (bu, bv) = (one - su, v * su);
-                (one - bu - bv, bu, bv)
-            } else {
-                (one, u, v)
-            };
-            let q: [V; 3] = std::array::from_fn(|x| a[x] * w0 + b[x] * w1 + c[x] * w2);
-            let d: [V; 3] = std::array::from_fn(|x| q[x] - ps[x]);
-            let dist2 = dot(&d, &d);
-            let under = dot(&ng, &d).lt(zero);
+            let q = planar_point(a, b, c, light.triangle, u, v);
+            let d = q - ps;
+            let dist2 = d.dot(d);
+            let under = ng.dot(d).lt(zero);
             let mut good = jv.lt(V::splat(nf)) & dist2.gt(zero);
             // The divider, not the arithmetic, bounds this loop (divisions and square roots
             // issue one every few cycles and wait a dozen), so each lane pays as few as it can.
             if LAMBERT {
-                // f·|cos| = (ρ/π)·c and p_bsdf = c/π, with c the cosine on the lit side (ρ/π
-                // is applied to the sum), and p_light = r²/(cos_l·A). The power heuristic's
-                // weight over p_light, c·(n·p_light)²/((n·p_light)² + p_bsdf²)/p_light, is
-                // n²π²·t/(n²π² + t²) with t = c·cos_l·A/r² = (c·r)(cos_l·A·r)/(r²)²: no square
-                // root, one division for 1/r² and one for the weight; finite, and 0 where t is
-                // (a light seen edge-on), as the limit is.
-                let a_l = dot(&nl, &d) * neg_area; // cos_l·A·r
-                let a_s = dot(&ns, &d) * side; // c·r
-                good = good & a_l.gt(zero) & a_s.gt(zero);
-                let inv = one / dist2;
-                let t = (a_l * a_s) * (inv * inv);
-                let k = V::splat(nf * nf * PI * PI);
-                *wh = (k * t) / (k + t * t);
+                let (faces, w) = lambert_weight(d, dist2, (nl, neg_area), (ns, side), n2pi2);
+                good = good & faces;
+                *wh = w;
             } else {
                 // The pdf is carried as its reciprocal x = 1/p_light = cos_l·A/r².
                 let inv_r = one / dist2.sqrt();
-                let w: [V; 3] = std::array::from_fn(|x| d[x] * inv_r);
-                let cos_l = dot(&nl_neg, &w);
+                let w = d.scale(inv_r);
+                let cos_l = nl_neg.dot(w);
                 let x_l = cos_l * area * (inv_r * inv_r);
                 good = good & cos_l.gt(zero);
                 (one / x_l).store(&mut pdf[first..]);
-                dot(&ns, &w).store(&mut cos_s[first..]);
-                for x in 0..3 {
-                    w[x].store(&mut wi[x][first..]);
-                }
+                ns.dot(w).store(&mut cos_s[first..]);
+                w.x.store(&mut wi[0][first..]);
+                w.y.store(&mut wi[1][first..]);
+                w.z.store(&mut wi[2][first..]);
             }
-            // The ray: from the origin on its side to the point pushed off the light towards
-            // it (`offset_ray_origin` at both ends).
-            let o: [V; 3] = std::array::from_fn(|x| V::select(under, o_below[x], o_above[x]));
-            let back: [V; 3] = std::array::from_fn(|x| o[x] - q[x]);
-            let towards = dot(&back, &nl).lt(zero);
-            for x in 0..3 {
-                let target = V::select(towards, q[x] - off[x], q[x] + off[x]);
-                (target - o[x]).store(&mut pk.d[x][first..]);
-            }
+            let dir = shadow_dir(q, (nl, off), under, (o_above, o_below));
+            dir.x.store(&mut pk.d[0][first..]);
+            dir.y.store(&mut pk.d[1][first..]);
+            dir.z.store(&mut pk.d[2][first..]);
             ok |= V::bits(good) << first;
             below |= V::bits(under) << first;
         }

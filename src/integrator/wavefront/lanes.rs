@@ -2,6 +2,7 @@
 //! steps, and the loop that feeds them camera samples and steps them.
 
 use super::rng::LaneSampler;
+use crate::simd::{Float, Vector3};
 use super::simd::{F, M, U, V3};
 use super::Wavefront;
 use crate::camera::Camera;
@@ -159,10 +160,8 @@ impl Wavefront<'_> {
         let [ux, uy] = st.rng.next::<2>(fresh);
         let s = (F::load(px) + ux) / F::splat(cam.width as f32);
         let t = (F::load(py) + uy) / F::splat(cam.height as f32);
-        let v = |a: glam::Vec3A| V3::splat(a.into());
-        let p = ((v(cam.tl) + v(cam.right).scale(s)) + v(cam.down).scale(t))
-            + v(cam.twist).scale(s * t);
-        let eye = v(cam.eye);
+        let p: V3 = cam.plane_point_lanes(s, t);
+        let eye = V3::broadcast(cam.eye);
         let d = (p - eye).normalize();
         let keep = |a: &mut [[f32; 16]; 3], x: V3| V3::select(fresh, x, V3::load(a)).store(a);
         keep(&mut st.o, eye);

@@ -17,13 +17,16 @@
 //! is [`Wavefront::front`] for every group, [`Wavefront::shadows`], then
 //! [`Wavefront::back`] for every group.
 //!
-//! Each lane computes exactly what `path::li` computes for its camera sample, operation for
-//! operation ([`simd`]): the same numbers from the same sampler ([`rng`]), the same hits,
-//! the same IEEE operations in the same order. A sample's value is therefore the same bits
-//! whichever of the two renders it, and so is the image (the film's fixed-point sums do not
-//! depend on the order samples arrive in): on any CPU, any thread count, any split into
+//! Each lane computes exactly what `path::li` computes for its camera sample: the same
+//! numbers from the same sampler ([`rng`]), the same hits, and the same shading maths, which
+//! is written once over the lane traits of [`crate::simd`] (frames, warps, Fresnel,
+//! refraction, MIS, ray offsets, hit points, light samples, Lambert and glass sampling) and
+//! instanced here with sixteen lanes, there with one. A sample's value is therefore the same
+//! bits whichever of the two renders it, and so is the image (the film's fixed-point sums do
+//! not depend on the order samples arrive in): on any CPU, any thread count, any split into
 //! passes or machines. `tests/wavefront.rs` compares the two on scenes that take every
-//! branch.
+//! branch (what is still the lanes' own: the traversal, the material dispatch by masks, the
+//! roulette).
 //!
 //! The scenes it takes ([`Wavefront::new`]): those the path tracer traces by brute force
 //! (`accel::flat`: at most 64 triangles and 4 spheres); every material Lambertian (one- or

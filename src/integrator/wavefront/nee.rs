@@ -4,12 +4,18 @@
 //! (`nee::planar::planar::<true>`, Lambertian vertices), the samples computed sixteen lanes
 //! at a time and each lane's shadow rays traced as its own packets.
 
-use super::bsdf::Frame16;
 use super::simd::{F, M, V3};
 use super::Wavefront;
 use crate::accel::{ShadowPacket, PACKET};
-use crate::geometry::ray::SHADOW_EPSILON;
+use crate::geometry::ray::{offset_by, offset_push, offset_ray_origin, SHADOW_EPSILON};
+use crate::geometry::Frame;
+use crate::integrator::nee::{lambert_weight, shadow_dir, wrap};
 use crate::integrator::RayStats;
+use crate::light::{planar_point, towards};
+use crate::material::lambert;
+use crate::material::sampling::cosine_hemisphere_pdf_lanes;
+use crate::material::sampling::power_heuristic_lanes;
+use crate::simd::{Float, Vector3};
 use glam::Vec3A;
 use std::f32::consts::{FRAC_1_PI, PI};
 
@@ -20,22 +26,10 @@ pub struct Vertex {
     pub p: V3,
     pub p_err: V3,
     pub ng: V3,
-    pub frame: Frame16,
+    pub frame: Frame<V3>,
     pub albedo: V3,
     pub oriented: M,
     pub side: F,
-}
-
-/// `offset_ray_origin(p, p_err, n, w)`'s push: n·2(|n|·p_err).
-#[inline(always)]
-pub fn push(n: V3, p_err: V3) -> V3 {
-    n.scale(F::splat(2.0) * n.abs().dot(p_err))
-}
-
-/// `offset_ray_origin(p, _, n, w)` with its push `off`: p moved to `w`'s side of the surface.
-#[inline(always)]
-pub fn offset(p: V3, off: V3, n: V3, w: V3) -> V3 {
-    V3::select(w.dot(n).lt(F::zero()), p - off, p + off)
 }
 
 impl Wavefront<'_> {
@@ -54,37 +48,23 @@ impl Wavefront<'_> {
         let (zero, one) = (F::zero(), F::splat(1.0));
         let lt = &self.light;
         let (la, lb, lc) = (V3::splat(lt.a), V3::splat(lt.b), V3::splat(lt.c));
-        // `AreaLight::sample_point`.
-        let pl = if lt.triangle {
-            let su = ux.sqrt();
-            let (bu, bv) = (one - su, uy * su);
-            (la.scale((one - bu) - bv) + lb.scale(bu)) + lc.scale(bv)
-        } else {
-            (la + lb.scale(ux)) + lc.scale(uy)
-        };
+        // `AreaLight::sample_point` and `Lights::sample` (`sample_discrete` gives the one
+        // light probability one).
+        let pl = planar_point(la, lb, lc, lt.triangle, ux, uy);
         let ln = V3::splat(lt.normal);
-        let dl = pl - v.p;
-        let dist2 = dl.dot(dl);
-        let wi = dl.div(dist2.sqrt());
-        let cos_l = -ln.dot(wi);
-        // (`sample_discrete` gives the one light probability one.)
-        let pdf = (one * dist2) / (cos_l * F::splat(lt.area));
+        let (dl, dist2, wi, cos_l, pdf) = towards(v.p, pl, ln, one, F::splat(lt.area));
         // `Lambert::eval` and `pdf` on the side the path is on.
         let wil = v.frame.to_local(wi);
         let wz = wil.z * v.side;
-        let f = V3::select(
-            v.oriented & !wz.le(zero),
-            v.albedo.scale(F::splat(FRAC_1_PI)),
-            V3::zero(),
-        );
-        let bsdf_pdf = F::select(v.oriented, wz.max_num(zero) * F::splat(FRAC_1_PI), zero);
+        let f = V3::select(v.oriented, lambert::eval(v.albedo, wz), V3::zero());
+        let bsdf_pdf = F::select(v.oriented, cosine_hemisphere_pdf_lanes(wz), zero);
         let f = f.scale(wil.z.abs());
         let shadow = lanes & !dist2.eq(zero) & !cos_l.le(zero) & !f.is_zero();
         // The shadow ray (`spawn_ray_to`), both ends pushed off their surfaces.
-        let so = offset(v.p, push(v.ng, v.p_err), v.ng, dl);
+        let so = offset_ray_origin(v.p, v.p_err, v.ng, dl);
         let loff = V3::splat(lt.offset);
-        let target = V3::select((so - pl).dot(ln).lt(zero), pl - loff, pl + loff);
-        let mis = super::path::power_heuristic(one * pdf, bsdf_pdf);
+        let target = offset_by(pl, loff, ln, so - pl);
+        let mis = power_heuristic_lanes(one * pdf, bsdf_pdf);
         let contribution = (f * V3::splat(lt.radiance)).scale(mis / pdf);
         (shadow, so, target - so, contribution)
     }
@@ -112,7 +92,7 @@ impl Wavefront<'_> {
         if lanes == 0 {
             return V3::zero();
         }
-        let (zero, one) = (F::zero(), F::splat(1.0));
+        let zero = F::zero();
         let lt = &self.light;
         let n = self.shadow_rays;
         let nf = n as f32;
@@ -120,9 +100,9 @@ impl Wavefront<'_> {
         let (nl, off) = (V3::splat(lt.normal), V3::splat(lt.offset));
         let ns = v.frame.n;
         // The two possible origins, above and below the surface (`offset_ray_origin`).
-        let push = push(v.ng, v.p_err);
-        let above = offset(v.p, push, v.ng, v.ng);
-        let below = offset(v.p, push, v.ng, -v.ng);
+        let push = offset_push(v.ng, v.p_err);
+        let above = offset_by(v.p, push, v.ng, v.ng);
+        let below = offset_by(v.p, push, v.ng, -v.ng);
         let (mut above_a, mut below_a) = ([[0f32; 16]; 3], [[0f32; 16]; 3]);
         above.store(&mut above_a);
         below.store(&mut below_a);
@@ -141,30 +121,16 @@ impl Wavefront<'_> {
             for s in 0..m {
                 let j = first + s as u32;
                 // Sample j of the lattice shifted by Δ, wrapped into [0, 1).
-                let wrap = |x: F| F::select(x.ge(one), x - one, x);
                 let u = wrap(du + F::splat(j as f32) * inv_n);
                 let w = wrap(dv + F::splat(crate::integrator::lattice_v(j)));
-                let (w0, w1, w2) = if lt.triangle {
-                    let su = u.sqrt();
-                    let (bu, bv) = (one - su, w * su);
-                    ((one - bu) - bv, bu, bv)
-                } else {
-                    (one, u, w)
-                };
-                let q = (a.scale(w0) + b.scale(w1)) + c.scale(w2);
+                let q = planar_point(a, b, c, lt.triangle, u, w);
                 let d = q - v.p;
                 let dist2 = d.dot(d);
                 under[s] = v.ng.dot(d).lt(zero);
-                let a_l = nl.dot(d) * neg_area;
-                let a_s = ns.dot(d) * v.side;
-                good[s] = lanes & dist2.gt(zero) & a_l.gt(zero) & a_s.gt(zero);
-                let inv = one / dist2;
-                let t = (a_l * a_s) * (inv * inv);
-                weight[s] = (k * t) / (k + t * t);
-                let o = V3::select(under[s], below, above);
-                let towards = (o - q).dot(nl).lt(zero);
-                let target = V3::select(towards, q - off, q + off);
-                (target - o).store(&mut dirs[s]);
+                let (faces, w) = lambert_weight(d, dist2, (nl, neg_area), (ns, v.side), k);
+                good[s] = lanes & dist2.gt(zero) & faces;
+                weight[s] = w;
+                shadow_dir(q, (nl, off), under[s], (above, below)).store(&mut dirs[s]);
             }
             // Each lane's shadow rays, in up to two packets by the side they leave from.
             let mut visible = [0 as M; PACKET];

@@ -2,26 +2,22 @@
 //! emission, the light sample, the BSDF sample, the roulette), and the samples of the paths
 //! that end, to the film.
 
-use super::bsdf::{self, Frame16};
-use super::nee::{offset, push, Vertex};
+use super::bsdf;
+use super::nee::Vertex;
 use super::rng::LaneSampler;
 use super::simd::{F, M, U, V3};
 use super::{trace, Lanes, Wavefront, GROUPS};
 use super::{BLACK, EMITTER, GLASS, KIND, LAMBERT, MIRROR, TWO_SIDED};
 use crate::film::PixelSums;
-use crate::geometry::ray::{gamma, SHADOW_EPSILON};
+use crate::geometry::ray::{offset_ray_origin, SHADOW_EPSILON};
+use crate::geometry::sphere::surface_point;
+use crate::geometry::triangle::barycentric_point;
+use crate::geometry::Frame;
 use crate::integrator::RussianRoulette;
+use crate::light::area_pdf;
+use crate::material::sampling::power_heuristic_lanes;
+use crate::simd::{Float, Vector3};
 use crate::render::{RenderStats, TilePixel};
-
-/// Power heuristic with β = 2, lane by lane as `sampling::power_heuristic`.
-#[inline(always)]
-pub fn power_heuristic(f: F, g: F) -> F {
-    let (f2, g2) = (f * f, g * g);
-    let sum = f2 + g2;
-    let (zero, inf) = (F::zero(), F::splat(f32::INFINITY));
-    let r = F::select(sum.eq(zero), zero, f2 / sum);
-    F::select(f2.abs().eq(inf), F::splat(1.0), r)
-}
 
 impl Wavefront<'_> {
     /// The hit points of `h`: `Scene::interaction`'s point, error bound and unit normal, for
@@ -34,19 +30,14 @@ impl Wavefront<'_> {
             V3::lookup64(&self.p1, prim),
             V3::lookup64(&self.p2, prim),
         );
-        let w = (F::splat(1.0) - h.u) - h.v;
-        let (a, b, c) = (p0.scale(w), p1.scale(h.u), p2.scale(h.v));
-        let tp = (a + b) + c;
-        let t_err = ((a.abs() + b.abs()) + c.abs()).scale(F::splat(gamma(7)));
+        let (tp, t_err) = barycentric_point(p0, p1, p2, h.u, h.v);
         let tn = V3::lookup64(&self.ng, prim);
         if self.balls.is_empty() {
             return (tp, t_err, tn);
         }
         // Spheres: the hit reprojected onto the surface (p0 holds the centre).
         let r = F::lookup64(&self.radius, prim);
-        let sn = ((o + d.scale(h.t)) - p0).normalize();
-        let sp = p0 + sn.scale(r);
-        let s_err = (p0.abs() + sn.scale(r).abs()).scale(F::splat(gamma(5)));
+        let (sp, sn, s_err) = surface_point(p0, r, o + d.scale(h.t));
         (
             V3::select(h.sphere, sp, tp),
             V3::select(h.sphere, s_err, t_err),
@@ -99,16 +90,9 @@ impl Wavefront<'_> {
             V3::zero(),
         );
         let prev_p = V3::load(&st.prev_p);
-        let dd = p - prev_p;
-        let dist2 = dd.dot(dd);
-        let cos_l = (-ng.dot(dd)).max_num(zero) / dist2.sqrt();
-        let light_pdf = F::select(
-            cos_l.le(zero),
-            zero,
-            (F::splat(lt.pmf) * dist2) / (cos_l * F::splat(lt.area)),
-        );
+        let light_pdf = area_pdf(prev_p, p, ng, F::splat(lt.pmf), F::splat(lt.area));
         let rays = F::splat(self.shadow_rays as f32);
-        let mis = power_heuristic(F::load(&st.prev_pdf), rays * light_pdf);
+        let mis = power_heuristic_lanes(F::load(&st.prev_pdf), rays * light_pdf);
         let e = V3::select(emitter & st.has_prev, le.scale(mis), le);
         l = V3::select(hit & !hidden, l + beta * e, l);
 
@@ -119,7 +103,7 @@ impl Wavefront<'_> {
 
         // The shading frame and `Material::orient`: the side the BSDF is seen from (glass:
         // both), none for a one-sided material seen from behind.
-        let frame = Frame16::new(ng);
+        let frame = Frame::from_normal(ng);
         let wo = frame.to_local(nd);
         let (lambert, mirror, glass) = (kind(LAMBERT), kind(MIRROR), kind(GLASS));
         let front = wo.z.gt(zero);
@@ -177,7 +161,7 @@ impl Wavefront<'_> {
         eta2 = F::select(alive, eta2 * (bs.eta * bs.eta), eta2);
         // `Frame::to_world` and `spawn_ray`.
         let wi = frame.to_world(bs.wi);
-        let no = offset(p, push(ng, p_err), ng, wi);
+        let no = offset_ray_origin(p, p_err, ng, wi);
         let depth = depth.add(U::splat(1));
         // Russian roulette.
         match self.rr {

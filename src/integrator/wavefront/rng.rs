@@ -6,6 +6,7 @@
 //! - [`Samplers16`]: any sampler (Owen-scrambled Sobol points), one `Sampler` a lane, each
 //!   request answered lane by lane.
 
+use crate::simd::Float;
 use super::simd::{pcg32, F, M, U};
 use crate::sampler::{Sampler, SamplerKind};
 

@@ -13,6 +13,7 @@
 //! built on them (`bsdf`, `nee`, `path`), is made inside such a function, which runs only
 //! where `Backend::detect` found the features. `simd_avx2.rs` is the same interface on AVX2.
 
+use crate::simd::Float;
 use std::arch::x86_64::*;
 use std::ops::{Add, BitAnd, Div, Mul, Neg, Sub};
 
@@ -33,14 +34,6 @@ pub struct U(pub __m512i);
 
 impl F {
     #[inline(always)]
-    pub fn splat(x: f32) -> F {
-        F(unsafe { _mm512_set1_ps(x) })
-    }
-    #[inline(always)]
-    pub fn zero() -> F {
-        F(unsafe { _mm512_setzero_ps() })
-    }
-    #[inline(always)]
     pub fn load(a: &[f32; 16]) -> F {
         F(unsafe { _mm512_loadu_ps(a.as_ptr()) })
     }
@@ -53,32 +46,6 @@ impl F {
         let mut a = [0.0; 16];
         self.store(&mut a);
         a
-    }
-    #[inline(always)]
-    pub fn sqrt(self) -> F {
-        F(unsafe { _mm512_sqrt_ps(self.0) })
-    }
-    /// |x|: the sign bit cleared, as `f32::abs` and glam's `abs`.
-    #[inline(always)]
-    pub fn abs(self) -> F {
-        F(unsafe {
-            _mm512_castsi512_ps(_mm512_and_si512(
-                _mm512_castps_si512(self.0),
-                _mm512_set1_epi32(0x7fff_ffff),
-            ))
-        })
-    }
-    /// `f32::max` against a number `o` that is not NaN: `o` where `self` is NaN (x86's
-    /// `maxps` gives its second operand where either is NaN). (Where the two are zeros of
-    /// opposite signs either may come out, as for `f32::max`; no caller tells them apart.)
-    #[inline(always)]
-    pub fn max_num(self, o: F) -> F {
-        F(unsafe { _mm512_max_ps(self.0, o.0) })
-    }
-    /// `f32::min` against a number `o` that is not NaN: `o` where `self` is NaN.
-    #[inline(always)]
-    pub fn min_num(self, o: F) -> F {
-        F(unsafe { _mm512_min_ps(self.0, o.0) })
     }
     /// `f32::max` of two numbers either of which may be NaN: the other where one is.
     #[inline(always)]
@@ -96,47 +63,6 @@ impl F {
     pub fn is_finite(self) -> M {
         // |x| < ∞ is false for ∞ and NaN.
         unsafe { _mm512_cmp_ps_mask::<_CMP_LT_OQ>(self.abs().0, _mm512_set1_ps(f32::INFINITY)) }
-    }
-    /// `x < o`, false for NaN.
-    #[inline(always)]
-    pub fn lt(self, o: F) -> M {
-        unsafe { _mm512_cmp_ps_mask::<_CMP_LT_OQ>(self.0, o.0) }
-    }
-    /// `x <= o`, false for NaN.
-    #[inline(always)]
-    pub fn le(self, o: F) -> M {
-        unsafe { _mm512_cmp_ps_mask::<_CMP_LE_OQ>(self.0, o.0) }
-    }
-    /// `x > o`, false for NaN.
-    #[inline(always)]
-    pub fn gt(self, o: F) -> M {
-        unsafe { _mm512_cmp_ps_mask::<_CMP_GT_OQ>(self.0, o.0) }
-    }
-    /// `x >= o`, false for NaN.
-    #[inline(always)]
-    pub fn ge(self, o: F) -> M {
-        unsafe { _mm512_cmp_ps_mask::<_CMP_GE_OQ>(self.0, o.0) }
-    }
-    /// `x == o`, false for NaN.
-    #[inline(always)]
-    pub fn eq(self, o: F) -> M {
-        unsafe { _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(self.0, o.0) }
-    }
-    /// `a` where `m`, else `b`.
-    #[inline(always)]
-    pub fn select(m: M, a: F, b: F) -> F {
-        F(unsafe { _mm512_mask_blend_ps(m, b.0, a.0) })
-    }
-    /// `mag.copysign(sign)`: the magnitude of `mag` with the sign bit of `sign`.
-    #[inline(always)]
-    pub fn copysign(mag: F, sign: F) -> F {
-        unsafe {
-            let s = _mm512_and_si512(_mm512_castps_si512(sign.0), _mm512_set1_epi32(i32::MIN));
-            F(_mm512_castsi512_ps(_mm512_or_si512(
-                s,
-                _mm512_castps_si512(mag.abs().0),
-            )))
-        }
     }
     /// `f32::next_up` of positive finite numbers: the next float up (one more in the bits).
     #[inline(always)]
@@ -173,6 +99,85 @@ impl F {
             let hi = _mm512_permutex2var_ps(t[2], idx.0, t[3]);
             let upper = _mm512_test_epi32_mask(idx.0, _mm512_set1_epi32(32));
             F(_mm512_mask_blend_ps(upper, lo, hi))
+        }
+    }
+}
+
+impl Float for F {
+    type Mask = M;
+    #[inline(always)]
+    fn any(m: M) -> bool {
+        m != 0
+    }
+    #[inline(always)]
+    fn splat(x: f32) -> F {
+        F(unsafe { _mm512_set1_ps(x) })
+    }
+    #[inline(always)]
+    fn sqrt(self) -> F {
+        F(unsafe { _mm512_sqrt_ps(self.0) })
+    }
+    /// |x|: the sign bit cleared, as `f32::abs` and glam's `abs`.
+    #[inline(always)]
+    fn abs(self) -> F {
+        F(unsafe {
+            _mm512_castsi512_ps(_mm512_and_si512(
+                _mm512_castps_si512(self.0),
+                _mm512_set1_epi32(0x7fff_ffff),
+            ))
+        })
+    }
+    /// `f32::max` against a number `o` that is not NaN: `o` where `self` is NaN (x86's
+    /// `maxps` gives its second operand where either is NaN). (Where the two are zeros of
+    /// opposite signs either may come out, as for `f32::max`; no caller tells them apart.)
+    #[inline(always)]
+    fn max_num(self, o: F) -> F {
+        F(unsafe { _mm512_max_ps(self.0, o.0) })
+    }
+    /// `f32::min` against a number `o` that is not NaN: `o` where `self` is NaN.
+    #[inline(always)]
+    fn min_num(self, o: F) -> F {
+        F(unsafe { _mm512_min_ps(self.0, o.0) })
+    }
+    /// `x < o`, false for NaN.
+    #[inline(always)]
+    fn lt(self, o: F) -> M {
+        unsafe { _mm512_cmp_ps_mask::<_CMP_LT_OQ>(self.0, o.0) }
+    }
+    /// `x <= o`, false for NaN.
+    #[inline(always)]
+    fn le(self, o: F) -> M {
+        unsafe { _mm512_cmp_ps_mask::<_CMP_LE_OQ>(self.0, o.0) }
+    }
+    /// `x > o`, false for NaN.
+    #[inline(always)]
+    fn gt(self, o: F) -> M {
+        unsafe { _mm512_cmp_ps_mask::<_CMP_GT_OQ>(self.0, o.0) }
+    }
+    /// `x >= o`, false for NaN.
+    #[inline(always)]
+    fn ge(self, o: F) -> M {
+        unsafe { _mm512_cmp_ps_mask::<_CMP_GE_OQ>(self.0, o.0) }
+    }
+    /// `x == o`, false for NaN.
+    #[inline(always)]
+    fn eq(self, o: F) -> M {
+        unsafe { _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(self.0, o.0) }
+    }
+    /// `a` where `m`, else `b`.
+    #[inline(always)]
+    fn select(m: M, a: F, b: F) -> F {
+        F(unsafe { _mm512_mask_blend_ps(m, b.0, a.0) })
+    }
+    /// `self.copysign(sign)`: the magnitude of `self` with the sign bit of `sign`.
+    #[inline(always)]
+    fn copysign(self, sign: F) -> F {
+        unsafe {
+            let s = _mm512_and_si512(_mm512_castps_si512(sign.0), _mm512_set1_epi32(i32::MIN));
+            F(_mm512_castsi512_ps(_mm512_or_si512(
+                s,
+                _mm512_castps_si512(self.abs().0),
+            )))
         }
     }
 }

@@ -9,6 +9,7 @@
 //! every call is made inside a function compiled for AVX2 (`lanes_fn!` in `avx2.rs`), which
 //! runs only where `Backend::detect` found the features.
 
+use crate::simd::Float;
 use std::arch::x86_64::*;
 use std::ops::{Add, BitAnd, Div, Mul, Neg, Sub};
 
@@ -63,14 +64,6 @@ fn lanes_of(m: M, h: usize) -> __m256i {
 
 impl F {
     #[inline(always)]
-    pub fn splat(x: f32) -> F {
-        F([unsafe { _mm256_set1_ps(x) }; 2])
-    }
-    #[inline(always)]
-    pub fn zero() -> F {
-        F([unsafe { _mm256_setzero_ps() }; 2])
-    }
-    #[inline(always)]
     pub fn load(a: &[f32; 16]) -> F {
         F(both!(h => unsafe { _mm256_loadu_ps(a.as_ptr().add(8 * h)) }))
     }
@@ -86,28 +79,6 @@ impl F {
         let mut a = [0.0; 16];
         self.store(&mut a);
         a
-    }
-    #[inline(always)]
-    pub fn sqrt(self) -> F {
-        F(both!(h => unsafe { _mm256_sqrt_ps(self.0[h]) }))
-    }
-    /// |x|: the sign bit cleared, as `f32::abs` and glam's `abs`.
-    #[inline(always)]
-    pub fn abs(self) -> F {
-        F(both!(h => unsafe {
-            _mm256_and_ps(self.0[h], _mm256_castsi256_ps(_mm256_set1_epi32(0x7fff_ffff)))
-        }))
-    }
-    /// `f32::max` against a number `o` that is not NaN: `o` where `self` is NaN (x86's
-    /// `maxps` gives its second operand where either is NaN).
-    #[inline(always)]
-    pub fn max_num(self, o: F) -> F {
-        F(both!(h => unsafe { _mm256_max_ps(self.0[h], o.0[h]) }))
-    }
-    /// `f32::min` against a number `o` that is not NaN: `o` where `self` is NaN.
-    #[inline(always)]
-    pub fn min_num(self, o: F) -> F {
-        F(both!(h => unsafe { _mm256_min_ps(self.0[h], o.0[h]) }))
     }
     /// `f32::max` of two numbers either of which may be NaN: the other where one is.
     #[inline(always)]
@@ -125,47 +96,6 @@ impl F {
     pub fn is_finite(self) -> M {
         // |x| < ∞ is false for ∞ and NaN.
         self.abs().lt(F::splat(f32::INFINITY))
-    }
-    /// `x < o`, false for NaN.
-    #[inline(always)]
-    pub fn lt(self, o: F) -> M {
-        mask_of(both!(h => unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(self.0[h], o.0[h]) }))
-    }
-    /// `x <= o`, false for NaN.
-    #[inline(always)]
-    pub fn le(self, o: F) -> M {
-        mask_of(both!(h => unsafe { _mm256_cmp_ps::<_CMP_LE_OQ>(self.0[h], o.0[h]) }))
-    }
-    /// `x > o`, false for NaN.
-    #[inline(always)]
-    pub fn gt(self, o: F) -> M {
-        mask_of(both!(h => unsafe { _mm256_cmp_ps::<_CMP_GT_OQ>(self.0[h], o.0[h]) }))
-    }
-    /// `x >= o`, false for NaN.
-    #[inline(always)]
-    pub fn ge(self, o: F) -> M {
-        mask_of(both!(h => unsafe { _mm256_cmp_ps::<_CMP_GE_OQ>(self.0[h], o.0[h]) }))
-    }
-    /// `x == o`, false for NaN.
-    #[inline(always)]
-    pub fn eq(self, o: F) -> M {
-        mask_of(both!(h => unsafe { _mm256_cmp_ps::<_CMP_EQ_OQ>(self.0[h], o.0[h]) }))
-    }
-    /// `a` where `m`, else `b`.
-    #[inline(always)]
-    pub fn select(m: M, a: F, b: F) -> F {
-        F(
-            both!(h => unsafe { _mm256_blendv_ps(b.0[h], a.0[h], _mm256_castsi256_ps(lanes_of(m, h))) }),
-        )
-    }
-    /// `mag.copysign(sign)`: the magnitude of `mag` with the sign bit of `sign`.
-    #[inline(always)]
-    pub fn copysign(mag: F, sign: F) -> F {
-        let m = mag.abs();
-        F(both!(h => unsafe {
-            let bit = _mm256_castsi256_ps(_mm256_set1_epi32(i32::MIN));
-            _mm256_or_ps(m.0[h], _mm256_and_ps(sign.0[h], bit))
-        }))
     }
     /// `f32::next_up` of positive finite numbers: the next float up (one more in the bits).
     #[inline(always)]
@@ -204,6 +134,81 @@ impl F {
         F(both!(h => unsafe {
             // (An index below 64 reads inside the table.)
             _mm256_i32gather_ps::<4>(table.as_ptr(), _mm256_and_si256(idx.0[h], _mm256_set1_epi32(63)))
+        }))
+    }
+}
+
+impl Float for F {
+    type Mask = M;
+    #[inline(always)]
+    fn any(m: M) -> bool {
+        m != 0
+    }
+    #[inline(always)]
+    fn splat(x: f32) -> F {
+        F([unsafe { _mm256_set1_ps(x) }; 2])
+    }
+    #[inline(always)]
+    fn sqrt(self) -> F {
+        F(both!(h => unsafe { _mm256_sqrt_ps(self.0[h]) }))
+    }
+    /// |x|: the sign bit cleared, as `f32::abs` and glam's `abs`.
+    #[inline(always)]
+    fn abs(self) -> F {
+        F(both!(h => unsafe {
+            _mm256_and_ps(self.0[h], _mm256_castsi256_ps(_mm256_set1_epi32(0x7fff_ffff)))
+        }))
+    }
+    /// `f32::max` against a number `o` that is not NaN: `o` where `self` is NaN (x86's
+    /// `maxps` gives its second operand where either is NaN).
+    #[inline(always)]
+    fn max_num(self, o: F) -> F {
+        F(both!(h => unsafe { _mm256_max_ps(self.0[h], o.0[h]) }))
+    }
+    /// `f32::min` against a number `o` that is not NaN: `o` where `self` is NaN.
+    #[inline(always)]
+    fn min_num(self, o: F) -> F {
+        F(both!(h => unsafe { _mm256_min_ps(self.0[h], o.0[h]) }))
+    }
+    /// `x < o`, false for NaN.
+    #[inline(always)]
+    fn lt(self, o: F) -> M {
+        mask_of(both!(h => unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(self.0[h], o.0[h]) }))
+    }
+    /// `x <= o`, false for NaN.
+    #[inline(always)]
+    fn le(self, o: F) -> M {
+        mask_of(both!(h => unsafe { _mm256_cmp_ps::<_CMP_LE_OQ>(self.0[h], o.0[h]) }))
+    }
+    /// `x > o`, false for NaN.
+    #[inline(always)]
+    fn gt(self, o: F) -> M {
+        mask_of(both!(h => unsafe { _mm256_cmp_ps::<_CMP_GT_OQ>(self.0[h], o.0[h]) }))
+    }
+    /// `x >= o`, false for NaN.
+    #[inline(always)]
+    fn ge(self, o: F) -> M {
+        mask_of(both!(h => unsafe { _mm256_cmp_ps::<_CMP_GE_OQ>(self.0[h], o.0[h]) }))
+    }
+    /// `x == o`, false for NaN.
+    #[inline(always)]
+    fn eq(self, o: F) -> M {
+        mask_of(both!(h => unsafe { _mm256_cmp_ps::<_CMP_EQ_OQ>(self.0[h], o.0[h]) }))
+    }
+    /// `a` where `m`, else `b`.
+    #[inline(always)]
+    fn select(m: M, a: F, b: F) -> F {
+        F(
+            both!(h => unsafe { _mm256_blendv_ps(b.0[h], a.0[h], _mm256_castsi256_ps(lanes_of(m, h))) }),
+        )
+    }
+    /// `self.copysign(sign)`: the magnitude of `self` with the sign bit of `sign`.
+    #[inline(always)]
+    fn copysign(self, sign: F) -> F {
+        let m = self.abs();
+        F(both!(h => unsafe {
+            let bit = _mm256_castsi256_ps(_mm256_set1_epi32(i32::MIN));
+            _mm256_or_ps(m.0[h], _mm256_and_ps(sign.0[h], bit))
         }))
     }
 }

@@ -14,8 +14,10 @@
 //! [`Triangle::intersect`]: crate::geometry::Triangle::intersect
 //! [`Sphere::intersect`]: crate::geometry::Sphere::intersect
 
+use crate::simd::{Float, Vector3};
 use super::simd::{F, M, U, V3};
 use super::{Ball, Tri};
+use crate::geometry::sphere::intersect_lanes;
 use crate::geometry::Ray;
 use crate::scene::Scene;
 
@@ -68,30 +70,6 @@ fn test(tri: &Tri, o: &V3, d: &V3) -> (F, F, F, M, M) {
     (u, v, t, clear, out)
 }
 
-/// `Sphere::intersect` lane by lane: the lanes hit in (0, `t_max`) and their t.
-#[inline(always)]
-fn sphere(b: &Ball, o: &V3, d: &V3, t_max: F) -> (M, F) {
-    let f = *o - V3::splat(b.center);
-    let a = d.dot(*d);
-    let bb = -f.dot(*d);
-    let l = f + d.scale(bb / a);
-    let disc = a * (F::splat(b.r2) - l.dot(l));
-    let sq = disc.sqrt();
-    let c = f.dot(f) - F::splat(b.r2);
-    let q = bb + F::copysign(sq, bb);
-    let zero = F::zero();
-    let centre = q.eq(zero);
-    let t0 = F::select(centre, -sq / a, c / q);
-    let t1 = F::select(centre, sq / a, q / a);
-    let swap = t0.gt(t1);
-    let (t0, t1) = (F::select(swap, t1, t0), F::select(swap, t0, t1));
-    let first = t0.gt(zero) & t0.lt(t_max);
-    let second = t1.gt(zero) & t1.lt(t_max);
-    // (A negative discriminant misses; a NaN one fails every comparison above.)
-    let hit = !disc.lt(zero) & (first | second);
-    (hit, F::select(first, t0, t1))
-}
-
 /// The ray of lane `l`.
 #[inline(always)]
 fn ray_of(o: &[[f32; 16]; 3], d: &[[f32; 16]; 3], l: usize) -> Ray {
@@ -119,7 +97,7 @@ pub unsafe fn closest(
     // The spheres first, each against the nearest hit so far (`Flat::nearest_sphere`).
     let (mut st, mut sprim, mut shit) = (inf, U::splat(u32::MAX), 0);
     for b in balls {
-        let (h, t) = sphere(b, &o, &d, st);
+        let (h, t) = intersect_lanes(V3::splat(b.center), F::splat(b.r2), o, d, st);
         let h = h & active;
         st = F::select(h, t, st);
         sprim = U::select(h, U::splat(b.prim), sprim);
@@ -236,7 +214,7 @@ pub unsafe fn occluded(
 ) -> M {
     let mut blocked: M = 0;
     for b in balls {
-        blocked |= sphere(b, &o, &d, t_max).0 & active;
+        blocked |= intersect_lanes(V3::splat(b.center), F::splat(b.r2), o, d, t_max).0 & active;
     }
     let mut unsure = Unsure::new();
     let zero = F::zero();

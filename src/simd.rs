@@ -1,0 +1,432 @@
+//! The lane types the shading and sampling maths is written over, once: [`Float`] (f32
+//! numbers, one or many lanes) and [`Vector3`] (three-component vectors of them).
+//!
+//! A formula written over these traits is compiled for the scalar path tracer with `f32`
+//! (one lane, mask `bool`) and glam's `Vec3A`, and for the wavefront
+//! ([`crate::integrator::wavefront`]) with its sixteen-lane `F` and `V3` under AVX-512 or
+//! AVX2 — the manner of Mitsuba 3, whose plugins are one source compiled to scalar and
+//! vector variants by Dr.Jit. Every operation is the IEEE operation of the same name lane by
+//! lane (no fused multiply-add, no approximations), and a branch is a `select` of both sides,
+//! so each lane of a vector instance computes exactly the scalar instance's bits: equal by
+//! construction. The functions built on them are `#[inline(always)]`, so that they are
+//! compiled into their callers with the callers' target features (a call would lose them).
+
+use glam::{BVec4A, Vec3, Vec3A, Vec4};
+use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
+
+/// f32 lanes: `f32` itself, or a SIMD vector of them.
+pub trait Float:
+    Copy
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+{
+    /// Which lanes a comparison holds in: `bool` for one lane, a bit a lane for vectors.
+    type Mask: Copy
+        + BitAnd<Output = Self::Mask>
+        + BitOr<Output = Self::Mask>
+        + Not<Output = Self::Mask>;
+    fn splat(x: f32) -> Self;
+    #[inline(always)]
+    fn zero() -> Self {
+        Self::splat(0.0)
+    }
+    fn sqrt(self) -> Self;
+    /// |x|: the sign bit cleared.
+    fn abs(self) -> Self;
+    /// `f32::max` against an `o` that is not NaN (`o` where `self` is NaN).
+    fn max_num(self, o: Self) -> Self;
+    /// `f32::min` against an `o` that is not NaN (`o` where `self` is NaN).
+    fn min_num(self, o: Self) -> Self;
+    /// The magnitude of `self` with the sign bit of `sign`.
+    fn copysign(self, sign: Self) -> Self;
+    /// Ordered comparisons: false where either side is NaN.
+    fn lt(self, o: Self) -> Self::Mask;
+    fn le(self, o: Self) -> Self::Mask;
+    fn gt(self, o: Self) -> Self::Mask;
+    fn ge(self, o: Self) -> Self::Mask;
+    fn eq(self, o: Self) -> Self::Mask;
+    /// `a` in the lanes of `m`, else `b`.
+    fn select(m: Self::Mask, a: Self, b: Self) -> Self;
+    /// Whether any lane of `m` is set (for early exits that skip work no lane needs).
+    fn any(m: Self::Mask) -> bool;
+}
+
+/// Three-component vectors of [`Float`] lanes, with glam's order of operations (the dot
+/// product is (x·x' + y·y') + z·z').
+pub trait Vector3:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Neg<Output = Self>
+{
+    type F: Float;
+    fn new(x: Self::F, y: Self::F, z: Self::F) -> Self;
+    fn x(self) -> Self::F;
+    fn y(self) -> Self::F;
+    fn z(self) -> Self::F;
+    fn dot(self, o: Self) -> Self::F;
+    /// Each component times `s`.
+    fn scale(self, s: Self::F) -> Self;
+    /// Each component divided by `s`.
+    fn div(self, s: Self::F) -> Self;
+    fn select(m: Mask<Self>, a: Self, b: Self) -> Self;
+    /// `v` in every lane.
+    fn broadcast(v: Vec3A) -> Self;
+    /// Each component's |x|.
+    fn abs(self) -> Self;
+    /// The unit vector: each component divided by the length (glam's SSE `normalize`).
+    fn normalize(self) -> Self;
+}
+
+/// The lane mask of a vector type.
+pub type Mask<V> = <<V as Vector3>::F as Float>::Mask;
+
+/// One lane.
+macro_rules! one_lane {
+    ($t:ty) => {
+        impl Float for $t {
+            type Mask = bool;
+            #[inline(always)]
+            fn splat(x: f32) -> $t {
+                x as $t
+            }
+            #[inline(always)]
+            fn sqrt(self) -> $t {
+                <$t>::sqrt(self)
+            }
+            #[inline(always)]
+            fn abs(self) -> $t {
+                <$t>::abs(self)
+            }
+            #[inline(always)]
+            fn max_num(self, o: $t) -> $t {
+                <$t>::max(self, o)
+            }
+            #[inline(always)]
+            fn min_num(self, o: $t) -> $t {
+                <$t>::min(self, o)
+            }
+            #[inline(always)]
+            fn copysign(self, sign: $t) -> $t {
+                <$t>::copysign(self, sign)
+            }
+            #[inline(always)]
+            fn lt(self, o: $t) -> bool {
+                self < o
+            }
+            #[inline(always)]
+            fn le(self, o: $t) -> bool {
+                self <= o
+            }
+            #[inline(always)]
+            fn gt(self, o: $t) -> bool {
+                self > o
+            }
+            #[inline(always)]
+            fn ge(self, o: $t) -> bool {
+                self >= o
+            }
+            #[inline(always)]
+            fn eq(self, o: $t) -> bool {
+                self == o
+            }
+            #[inline(always)]
+            fn select(m: bool, a: $t, b: $t) -> $t {
+                if m {
+                    a
+                } else {
+                    b
+                }
+            }
+            #[inline(always)]
+            fn any(m: bool) -> bool {
+                m
+            }
+        }
+    };
+}
+one_lane!(f32);
+
+/// Four lanes in an SSE (or NEON) register: shadow-ray packets of four.
+impl Float for Vec4 {
+    type Mask = BVec4A;
+    #[inline(always)]
+    fn splat(x: f32) -> Vec4 {
+        Vec4::splat(x)
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Vec4 {
+        crate::geometry::sqrt4(self)
+    }
+    #[inline(always)]
+    fn abs(self) -> Vec4 {
+        Vec4::abs(self)
+    }
+    #[inline(always)]
+    fn max_num(self, o: Vec4) -> Vec4 {
+        Vec4::max(self, o)
+    }
+    #[inline(always)]
+    fn min_num(self, o: Vec4) -> Vec4 {
+        Vec4::min(self, o)
+    }
+    #[inline(always)]
+    fn copysign(self, sign: Vec4) -> Vec4 {
+        Vec4::copysign(self, sign)
+    }
+    #[inline(always)]
+    fn lt(self, o: Vec4) -> BVec4A {
+        self.cmplt(o)
+    }
+    #[inline(always)]
+    fn le(self, o: Vec4) -> BVec4A {
+        self.cmple(o)
+    }
+    #[inline(always)]
+    fn gt(self, o: Vec4) -> BVec4A {
+        self.cmpgt(o)
+    }
+    #[inline(always)]
+    fn ge(self, o: Vec4) -> BVec4A {
+        self.cmpge(o)
+    }
+    #[inline(always)]
+    fn eq(self, o: Vec4) -> BVec4A {
+        self.cmpeq(o)
+    }
+    #[inline(always)]
+    fn select(m: BVec4A, a: Vec4, b: Vec4) -> Vec4 {
+        Vec4::select(m, a, b)
+    }
+    #[inline(always)]
+    fn any(m: BVec4A) -> bool {
+        m.any()
+    }
+}
+
+impl Vector3 for Vec3A {
+    type F = f32;
+    #[inline(always)]
+    fn new(x: f32, y: f32, z: f32) -> Vec3A {
+        Vec3A::new(x, y, z)
+    }
+    #[inline(always)]
+    fn x(self) -> f32 {
+        self.x
+    }
+    #[inline(always)]
+    fn y(self) -> f32 {
+        self.y
+    }
+    #[inline(always)]
+    fn z(self) -> f32 {
+        self.z
+    }
+    #[inline(always)]
+    fn dot(self, o: Vec3A) -> f32 {
+        Vec3A::dot(self, o)
+    }
+    #[inline(always)]
+    fn scale(self, s: f32) -> Vec3A {
+        self * s
+    }
+    #[inline(always)]
+    fn div(self, s: f32) -> Vec3A {
+        self / s
+    }
+    #[inline(always)]
+    fn select(m: bool, a: Vec3A, b: Vec3A) -> Vec3A {
+        if m {
+            a
+        } else {
+            b
+        }
+    }
+    #[inline(always)]
+    fn broadcast(v: Vec3A) -> Vec3A {
+        v
+    }
+    #[inline(always)]
+    fn abs(self) -> Vec3A {
+        Vec3A::abs(self)
+    }
+    #[inline(always)]
+    fn normalize(self) -> Vec3A {
+        Vec3A::normalize(self)
+    }
+}
+
+/// Colours (`crate::Color`) are glam's `Vec3`: the same operations, three scalars.
+impl Vector3 for Vec3 {
+    type F = f32;
+    #[inline(always)]
+    fn new(x: f32, y: f32, z: f32) -> Vec3 {
+        Vec3::new(x, y, z)
+    }
+    #[inline(always)]
+    fn x(self) -> f32 {
+        self.x
+    }
+    #[inline(always)]
+    fn y(self) -> f32 {
+        self.y
+    }
+    #[inline(always)]
+    fn z(self) -> f32 {
+        self.z
+    }
+    #[inline(always)]
+    fn dot(self, o: Vec3) -> f32 {
+        Vec3::dot(self, o)
+    }
+    #[inline(always)]
+    fn scale(self, s: f32) -> Vec3 {
+        self * s
+    }
+    #[inline(always)]
+    fn div(self, s: f32) -> Vec3 {
+        self / s
+    }
+    #[inline(always)]
+    fn select(m: bool, a: Vec3, b: Vec3) -> Vec3 {
+        if m {
+            a
+        } else {
+            b
+        }
+    }
+    #[inline(always)]
+    fn broadcast(v: Vec3A) -> Vec3 {
+        v.into()
+    }
+    #[inline(always)]
+    fn abs(self) -> Vec3 {
+        Vec3::abs(self)
+    }
+    #[inline(always)]
+    fn normalize(self) -> Vec3 {
+        Vec3::normalize(self)
+    }
+}
+
+/// Three-component vectors of lanes, a component to a vector of lanes (structure of arrays):
+/// the vector type of the wide instances, for points, directions and colours alike.
+#[derive(Clone, Copy)]
+pub struct V3<T> {
+    pub x: T,
+    pub y: T,
+    pub z: T,
+}
+
+impl<T: Float> V3<T> {
+    #[inline(always)]
+    pub fn splat(v: [f32; 3]) -> Self {
+        V3 {
+            x: T::splat(v[0]),
+            y: T::splat(v[1]),
+            z: T::splat(v[2]),
+        }
+    }
+    #[inline(always)]
+    pub fn zero() -> Self {
+        V3::splat([0.0; 3])
+    }
+    /// glam's `cross`: x = a.y·b.z − b.y·a.z, and so on.
+    #[inline(always)]
+    pub fn cross(self, o: Self) -> Self {
+        V3 {
+            x: self.y * o.z - o.y * self.z,
+            y: self.z * o.x - o.z * self.x,
+            z: self.x * o.y - o.x * self.y,
+        }
+    }
+    /// Lanes where all three components equal zero (`Vec3 == Vec3::ZERO`).
+    #[inline(always)]
+    pub fn is_zero(self) -> T::Mask {
+        let z = T::zero();
+        self.x.eq(z) & self.y.eq(z) & self.z.eq(z)
+    }
+}
+
+impl<T: Float> Vector3 for V3<T> {
+    type F = T;
+    #[inline(always)]
+    fn new(x: T, y: T, z: T) -> Self {
+        V3 { x, y, z }
+    }
+    #[inline(always)]
+    fn x(self) -> T {
+        self.x
+    }
+    #[inline(always)]
+    fn y(self) -> T {
+        self.y
+    }
+    #[inline(always)]
+    fn z(self) -> T {
+        self.z
+    }
+    /// glam's `dot`: (x·x' + y·y') + z·z'.
+    #[inline(always)]
+    fn dot(self, o: Self) -> T {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+    #[inline(always)]
+    fn scale(self, s: T) -> Self {
+        V3::new(self.x * s, self.y * s, self.z * s)
+    }
+    #[inline(always)]
+    fn div(self, s: T) -> Self {
+        V3::new(self.x / s, self.y / s, self.z / s)
+    }
+    #[inline(always)]
+    fn select(m: T::Mask, a: Self, b: Self) -> Self {
+        V3::new(
+            T::select(m, a.x, b.x),
+            T::select(m, a.y, b.y),
+            T::select(m, a.z, b.z),
+        )
+    }
+    #[inline(always)]
+    fn broadcast(v: Vec3A) -> Self {
+        V3::splat(v.into())
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        V3::new(self.x.abs(), self.y.abs(), self.z.abs())
+    }
+    /// glam's SSE `normalize`: each component divided by the length.
+    #[inline(always)]
+    fn normalize(self) -> Self {
+        self.div(self.dot(self).sqrt())
+    }
+}
+
+impl<T: Float> Add for V3<T> {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        V3::new(self.x + o.x, self.y + o.y, self.z + o.z)
+    }
+}
+impl<T: Float> Sub for V3<T> {
+    type Output = Self;
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        V3::new(self.x - o.x, self.y - o.y, self.z - o.z)
+    }
+}
+impl<T: Float> Mul for V3<T> {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, o: Self) -> Self {
+        V3::new(self.x * o.x, self.y * o.y, self.z * o.z)
+    }
+}
+impl<T: Float> Neg for V3<T> {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        V3::new(-self.x, -self.y, -self.z)
+    }
+}
