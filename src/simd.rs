@@ -204,110 +204,65 @@ impl Float for Vec4 {
     }
 }
 
-impl Vector3 for Vec3A {
-    type F = f32;
-    #[inline(always)]
-    fn new(x: f32, y: f32, z: f32) -> Vec3A {
-        Vec3A::new(x, y, z)
-    }
-    #[inline(always)]
-    fn x(self) -> f32 {
-        self.x
-    }
-    #[inline(always)]
-    fn y(self) -> f32 {
-        self.y
-    }
-    #[inline(always)]
-    fn z(self) -> f32 {
-        self.z
-    }
-    #[inline(always)]
-    fn dot(self, o: Vec3A) -> f32 {
-        Vec3A::dot(self, o)
-    }
-    #[inline(always)]
-    fn scale(self, s: f32) -> Vec3A {
-        self * s
-    }
-    #[inline(always)]
-    fn div(self, s: f32) -> Vec3A {
-        self / s
-    }
-    #[inline(always)]
-    fn select(m: bool, a: Vec3A, b: Vec3A) -> Vec3A {
-        if m {
-            a
-        } else {
-            b
+/// glam's `Vec3A` (points, directions) and `Vec3` (colours, `crate::Color`): the same
+/// operations on three scalars, one instance of each.
+macro_rules! glam_vector3 {
+    ($t:ty) => {
+        impl Vector3 for $t {
+            type F = f32;
+            #[inline(always)]
+            fn new(x: f32, y: f32, z: f32) -> $t {
+                <$t>::new(x, y, z)
+            }
+            #[inline(always)]
+            fn x(self) -> f32 {
+                self.x
+            }
+            #[inline(always)]
+            fn y(self) -> f32 {
+                self.y
+            }
+            #[inline(always)]
+            fn z(self) -> f32 {
+                self.z
+            }
+            #[inline(always)]
+            fn dot(self, o: $t) -> f32 {
+                <$t>::dot(self, o)
+            }
+            #[inline(always)]
+            fn scale(self, s: f32) -> $t {
+                self * s
+            }
+            #[inline(always)]
+            fn div(self, s: f32) -> $t {
+                self / s
+            }
+            #[inline(always)]
+            fn select(m: bool, a: $t, b: $t) -> $t {
+                if m {
+                    a
+                } else {
+                    b
+                }
+            }
+            #[inline(always)]
+            fn broadcast(v: Vec3A) -> $t {
+                v.into()
+            }
+            #[inline(always)]
+            fn abs(self) -> $t {
+                <$t>::abs(self)
+            }
+            #[inline(always)]
+            fn normalize(self) -> $t {
+                <$t>::normalize(self)
+            }
         }
-    }
-    #[inline(always)]
-    fn broadcast(v: Vec3A) -> Vec3A {
-        v
-    }
-    #[inline(always)]
-    fn abs(self) -> Vec3A {
-        Vec3A::abs(self)
-    }
-    #[inline(always)]
-    fn normalize(self) -> Vec3A {
-        Vec3A::normalize(self)
-    }
+    };
 }
-
-/// Colours (`crate::Color`) are glam's `Vec3`: the same operations, three scalars.
-impl Vector3 for Vec3 {
-    type F = f32;
-    #[inline(always)]
-    fn new(x: f32, y: f32, z: f32) -> Vec3 {
-        Vec3::new(x, y, z)
-    }
-    #[inline(always)]
-    fn x(self) -> f32 {
-        self.x
-    }
-    #[inline(always)]
-    fn y(self) -> f32 {
-        self.y
-    }
-    #[inline(always)]
-    fn z(self) -> f32 {
-        self.z
-    }
-    #[inline(always)]
-    fn dot(self, o: Vec3) -> f32 {
-        Vec3::dot(self, o)
-    }
-    #[inline(always)]
-    fn scale(self, s: f32) -> Vec3 {
-        self * s
-    }
-    #[inline(always)]
-    fn div(self, s: f32) -> Vec3 {
-        self / s
-    }
-    #[inline(always)]
-    fn select(m: bool, a: Vec3, b: Vec3) -> Vec3 {
-        if m {
-            a
-        } else {
-            b
-        }
-    }
-    #[inline(always)]
-    fn broadcast(v: Vec3A) -> Vec3 {
-        v.into()
-    }
-    #[inline(always)]
-    fn abs(self) -> Vec3 {
-        Vec3::abs(self)
-    }
-    #[inline(always)]
-    fn normalize(self) -> Vec3 {
-        Vec3::normalize(self)
-    }
-}
+glam_vector3!(Vec3A);
+glam_vector3!(Vec3);
 
 /// Three-component vectors of lanes, a component to a vector of lanes (structure of arrays):
 /// the vector type of the wide instances, for points, directions and colours alike.
