@@ -607,6 +607,114 @@ fn mirrors_and_glass_both_ways() {
     }
 }
 
+/// A sphere of radius `r` at `c` as a mesh of `2·rings·segments` triangles with smooth
+/// vertex normals (the sphere's), in `material`.
+fn smooth_ball(c: [f32; 3], r: f32, material: &str, rings: usize, segments: usize) -> String {
+    let mut normals = Vec::new();
+    for i in 0..=rings {
+        let theta = std::f32::consts::PI * i as f32 / rings as f32;
+        for j in 0..=segments {
+            let phi = std::f32::consts::TAU * j as f32 / segments as f32;
+            normals.push([
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                theta.sin() * phi.sin(),
+            ]);
+        }
+    }
+    let at = |i: usize, j: usize| i * (segments + 1) + j;
+    let mut indices = Vec::new();
+    for i in 0..rings {
+        for j in 0..segments {
+            indices.push([at(i, j), at(i, j + 1), at(i + 1, j)]);
+            indices.push([at(i + 1, j), at(i, j + 1), at(i + 1, j + 1)]);
+        }
+    }
+    let list = |v: Vec<String>| v.join(", ");
+    let p = normals.iter().map(|n| {
+        format!(
+            "[{}, {}, {}]",
+            c[0] + r * n[0],
+            c[1] + r * n[1],
+            c[2] + r * n[2]
+        )
+    });
+    let n = normals
+        .iter()
+        .map(|n| format!("[{}, {}, {}]", n[0], n[1], n[2]));
+    let idx = indices
+        .iter()
+        .map(|t| format!("[{}, {}, {}]", t[0], t[1], t[2]));
+    format!(
+        "[[shape]]\ntype = \"mesh\"\nmaterial = \"{material}\"\npositions = [{}]\nnormals = [{}]\nindices = [{}]\n",
+        list(p.collect()),
+        list(n.collect()),
+        list(idx.collect())
+    )
+}
+
+/// Scenes that brute force does not take (hundreds of triangles, smooth vertex normals,
+/// the BVH), traced by the lanes through the scene's own queries: the same film as one
+/// path at a time, with mirrors, glass, one and several shadow rays and both roulettes.
+#[test]
+fn traced_through_the_scene_both_ways() {
+    if !cpu_runs_it() {
+        return;
+    }
+    use mcrt::integrator::RussianRoulette;
+    let text = SPECULAR.to_string()
+        + &smooth_ball([0.9, 1.2, -0.6], 0.35, "glass", 8, 12)
+        + &smooth_ball([-1.1, 1.3, -0.4], 0.3, "white", 6, 10)
+        + &smooth_ball([0.0, 1.7, -1.2], 0.3, "mirror2", 6, 10);
+    for (k, (n, rr, hide)) in [(1, None, false), (3, Some(0.7), true)]
+        .into_iter()
+        .enumerate()
+    {
+        let scene = scene_from(&hiding_emitters(&text, hide));
+        assert!(scene.triangle_count() > 300 && !scene.is_flat());
+        let mut s = settings(
+            &scene,
+            FileSettings {
+                width: Some(37),
+                height: Some(29),
+                spp: Some(4),
+                seed: Some(50 + k as u64),
+                ..Default::default()
+            },
+        );
+        s.params.shadow_rays = n;
+        if let Some(q) = rr {
+            s.params.rr = RussianRoulette::Fixed(q);
+        }
+        let w = Wavefront::new(&scene, &s);
+        assert!(w.is_none_or(|w| !w.is_brute_force()));
+        same_both_ways(
+            scene,
+            &s,
+            &format!("smooth meshes, {n} shadow rays, {rr:?}"),
+        );
+    }
+    // The Cornell box through its BVH rather than by brute force, at every path length.
+    for depth in [1, 2, 5] {
+        let scene = cornell().without_flat();
+        let mut s = settings(
+            &scene,
+            FileSettings {
+                width: Some(24),
+                height: Some(24),
+                spp: Some(3),
+                ..Default::default()
+            },
+        );
+        s.params.max_depth = Some(depth);
+        same_both_ways(
+            scene,
+            &s,
+            &format!("Cornell box through the BVH, depth {depth}"),
+        );
+    }
+}
+
 /// Scenes and settings the wavefront does not take render one path at a time.
 #[test]
 fn declines_what_it_does_not_do() {
@@ -628,11 +736,6 @@ fn declines_what_it_does_not_do() {
     let mut s = base.clone();
     s.params.shadow_rays = 0;
     assert!(Wavefront::new(&scene, &s).is_none(), "no shadow ray");
-    // The path tracer's single rays through the BVH rather than by brute force.
-    assert!(
-        Wavefront::new(&cornell().without_flat(), &base).is_none(),
-        "the BVH traces"
-    );
     let declined = |what: &str, text: &str| {
         let scene = scene_from(text);
         let s = settings(&scene, FileSettings::default());
@@ -670,6 +773,13 @@ vertices = [[2, 0.1, 0], [2, 0.1, 1], [2, 1, 0]]
             "[texture.checks]\ntype = \"checkerboard\"\ncolor0 = [0.1, 0.1, 0.1]\ncolor1 = [0.9, 0.9, 0.9]\n[material.board]\ntype = \"lambert\"\nalbedo = \"checks\"",
         ),
     );
+    // What brute force does not take, the lanes trace through the scene's own queries.
+    let through_scene = |what: &str, scene: &Scene| {
+        let s = settings(scene, FileSettings::default());
+        let w = Wavefront::new(scene, &s);
+        assert!(w.is_some_and(|w| !w.is_brute_force()), "{what}");
+    };
+    through_scene("the BVH traces", &cornell().without_flat());
     let mesh = |normals: &str| {
         OPEN.to_string()
             + r#"
@@ -680,15 +790,16 @@ positions = [[-1, 0.1, 0], [1, 0.1, 0], [0, 0.1, 1]]
 indices = [[0, 1, 2]]
 "# + normals
     };
-    declined(
+    through_scene(
         "vertex normals",
-        &mesh("normals = [[0, 1, 0], [0.1, 1, 0], [0, 1, 0]]\n"),
+        &scene_from(&mesh("normals = [[0, 1, 0], [0.1, 1, 0], [0, 1, 0]]\n")),
     );
     // Vertex normals that are the face's own (on either side) are dropped when the scene is
     // built, so such a mesh is flat and taken.
     let scene = scene_from(&mesh("normals = [[0, 1, 0], [0, 1, 0], [0, 1, 0]]\n"));
     let s = settings(&scene, FileSettings::default());
-    assert!(Wavefront::new(&scene, &s).is_some(), "face normals");
+    let w = Wavefront::new(&scene, &s);
+    assert!(w.is_some_and(|w| w.is_brute_force()), "face normals");
     // Over 64 primitives.
     let many: String = (0..40)
         .map(|i| {
@@ -698,7 +809,7 @@ indices = [[0, 1, 2]]
             )
         })
         .collect();
-    declined("many primitives", &(OPEN.to_string() + &many));
+    through_scene("many primitives", &scene_from(&(OPEN.to_string() + &many)));
     // Five spheres: more than brute force takes (four are taken).
     let ball = |i: usize| {
         format!(
@@ -706,11 +817,12 @@ indices = [[0, 1, 2]]
             i as f32 * 0.3 - 0.6
         )
     };
-    declined(
+    through_scene(
         "five spheres",
-        &(OPEN.to_string() + &(0..5).map(ball).collect::<String>()),
+        &scene_from(&(OPEN.to_string() + &(0..5).map(ball).collect::<String>())),
     );
     let scene = scene_from(&(OPEN.to_string() + &(0..4).map(ball).collect::<String>()));
     let s = settings(&scene, FileSettings::default());
-    assert!(Wavefront::new(&scene, &s).is_some(), "four spheres");
+    let w = Wavefront::new(&scene, &s);
+    assert!(w.is_some_and(|w| w.is_brute_force()), "four spheres");
 }

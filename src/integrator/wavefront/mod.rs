@@ -1,14 +1,12 @@
-//! The path tracer sixteen paths at a time, for small scenes on CPUs with AVX-512 or AVX2.
+//! The path tracer sixteen paths at a time, on CPUs with AVX-512 or AVX2.
 //!
 //! [`super::path::li`] follows one path at a time: its arithmetic on three-component vectors
-//! fills three lanes of a four-lane register, its branches (which material, whether the
-//! light sample counts, whether roulette ends the path) vary from path to path, and a small
-//! scene's intersection tests, already sixteen triangles wide ([`crate::accel::flat`]),
-//! waste a block's empty lanes. Here sixteen paths advance together, a lane each, in the
-//! manner of a wavefront renderer (Laine, Karras and Aila, "Megakernels Considered Harmful:
-//! Wavefront Path Tracing on GPUs", HPG 2013; Mitsuba 3's `llvm` variants): every step
-//! traces all sixteen rays against each primitive in turn ([`trace`]), shades all sixteen
-//! hits, samples the light for all of them and traces their shadow rays ([`nee`]), samples
+//! fills three lanes of a four-lane register, and its branches (which material, whether the
+//! light sample counts, whether roulette ends the path) vary from path to path. Here sixteen
+//! paths advance together, a lane each, in the manner of a wavefront renderer (Laine, Karras
+//! and Aila, "Megakernels Considered Harmful: Wavefront Path Tracing on GPUs", HPG 2013;
+//! Mitsuba 3's `llvm` variants): every step finds all sixteen rays' hits ([`Trace`]), shades
+//! them, samples the light for all of them and traces their shadow rays ([`nee`]), samples
 //! their BSDFs ([`bsdf`]) and plays their roulette ([`path`]), with the branches turned into
 //! lane masks. A lane whose path ends takes the tile's next camera sample at the next step,
 //! so the lanes stay full until the tile runs out of samples. With one light sample a
@@ -16,6 +14,15 @@
 //! rays together, packed sixteen to a vector (each group's rays fill about half of one): a step
 //! is [`Wavefront::front`] for every group, [`Wavefront::shadows`], then
 //! [`Wavefront::back`] for every group.
+//!
+//! The hits come one of two ways ([`Trace`]). Where the path tracer itself traces single rays
+//! by brute force (`accel::flat`: at most 64 triangles and 4 spheres) and the triangles carry
+//! no vertex normals, the lanes test all sixteen rays against each primitive in turn
+//! ([`trace`]), the transpose of `accel::flat`, and look up shading data by primitive in
+//! tables of 64. Everywhere else each lane's ray goes to the scene's own query
+//! (`Scene::intersect`: the BVH, instances, masks) and the lanes take the hit's point and
+//! normals from its `Interaction`, with the shading data by material; the shadow rays go to
+//! `Scene::occluded`.
 //!
 //! Each lane computes exactly what `path::li` computes for its camera sample: the same
 //! numbers from the same sampler ([`rng`]), the same hits, and the same shading maths, which
@@ -25,18 +32,16 @@
 //! bits whichever of the two renders it, and so is the image (the film's fixed-point sums do
 //! not depend on the order samples arrive in): on any CPU, any thread count, any split into
 //! passes or machines. `tests/wavefront.rs` compares the two on scenes that take every
-//! branch (what is still the lanes' own: the traversal, the material dispatch by masks, the
-//! roulette).
+//! branch (what is still the lanes' own: the brute-force traversal, the material dispatch by
+//! masks, the roulette).
 //!
-//! The scenes it takes ([`Wavefront::new`]): those the path tracer traces by brute force
-//! (`accel::flat`: at most 64 triangles and 4 spheres); every material Lambertian (one- or
-//! two-sided, untextured), a mirror (untextured), smooth glass or black; no vertex normals
-//! (those equal to their faces' normals are dropped when the scene is built:
-//! [`crate::geometry::TriangleMesh::drop_flat_normals`]);
-//! one light, a triangle or a parallelogram; the `path` integrator, any number of shadow
-//! rays (one only with AVX2), either sampler. The Cornell box and the TNCG15 room are such
-//! scenes. Any other scene, and any CPU without AVX2, BMI1, BMI2 and POPCNT, renders with
-//! `path::li`.
+//! The scenes it takes ([`Wavefront::new`]): every material Lambertian (one- or two-sided,
+//! untextured), a mirror (untextured), smooth glass or black, none with a normal or bump
+//! map; one light, a triangle or a parallelogram of constant radiance; a pinhole or
+//! perspective camera; the `path` integrator, any number of shadow rays (one only with
+//! AVX2), either sampler. The Cornell box, the TNCG15 room and the Cornell box with the
+//! Stanford bunny are such scenes. Any other scene, and any CPU without AVX2, BMI1, BMI2 and
+//! POPCNT, renders with the stream ([`super::stream`]) or `path::li`.
 //!
 //! The lanes' code is written once over a small SIMD type of sixteen lanes and compiled
 //! twice ([`Backend`]): in one AVX-512 register ([`avx512`]) and in two AVX2 registers
@@ -68,10 +73,15 @@ const BLACK: u32 = 3;
 const TWO_SIDED: u32 = 4;
 const EMITTER: u32 = 8;
 
-/// A small scene prepared for sixteen paths at a time: the primitives for the tests, and
-/// per primitive what shading reads, in tables of 64 for lane lookups.
+/// A scene prepared for sixteen paths at a time: how its rays are traced, and what shading
+/// reads, per primitive in tables of 64 for lane lookups (brute force) or per material.
 pub struct Wavefront<'a> {
     scene: &'a Scene,
+    /// How the lanes find their hits.
+    trace: Trace,
+    /// With [`Trace::Scene`], each material's flags (`KIND`, `TWO_SIDED`; `EMITTER` comes
+    /// from the hit's light), colour and η, by material index.
+    materials: Vec<Shading>,
     tris: Vec<Tri>,
     balls: Vec<Ball>,
     /// Triangles: vertices and unit geometric normal (also the shading normal: no vertex
@@ -134,6 +144,59 @@ impl Backend {
     }
 }
 
+/// How the lanes find their hits and answer their shadow rays.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Trace {
+    /// Sixteen rays against every primitive in turn ([`trace`]), with shading data looked
+    /// up by primitive: where the path tracer itself traces single rays by brute force
+    /// (`accel::flat`) and the triangles carry no vertex normals.
+    Lanes,
+    /// Each lane's ray by the scene's own queries (`Scene::intersect`, `Scene::occluded`:
+    /// the BVH, instances, masks), its hit's point and normals from the scene's
+    /// `Interaction`, as the path tracer gets them: any other scene.
+    Scene,
+}
+
+/// What the lanes read of a material: the flags of a primitive (`KIND`, `TWO_SIDED`), the
+/// colour (Lambertian albedo, mirror reflectance) and relative index of refraction (glass).
+#[derive(Clone, Copy, Debug)]
+struct Shading {
+    flags: u32,
+    colour: [f32; 3],
+    eta: f32,
+}
+
+impl Shading {
+    /// The material as the lanes shade it, if they do: untextured, unperturbed Lambertian,
+    /// mirror, smooth glass of unit factors, or black.
+    fn of(material: &crate::material::Material) -> Option<Shading> {
+        if material.reads_uv() || material.perturbs() {
+            return None;
+        }
+        let (kind, colour, eta) = match &material.bsdf {
+            Bsdf::Lambert(b) => (LAMBERT, b.albedo, 1.0),
+            Bsdf::Mirror(b) => (MIRROR, b.reflectance, 1.0),
+            Bsdf::Dielectric(b) => {
+                // (Glass with factors other than 1 takes the scalar path.)
+                if b.specular_reflectance != crate::Color::ONE
+                    || b.specular_transmittance != crate::Color::ONE
+                {
+                    return None;
+                }
+                (GLASS, crate::Color::ONE, b.eta)
+            }
+            Bsdf::Black => (BLACK, crate::Color::ZERO, 1.0),
+            _ => return None,
+        };
+        let two_sided = if material.two_sided { TWO_SIDED } else { 0 };
+        Some(Shading {
+            flags: kind | two_sided,
+            colour: colour.into(),
+            eta,
+        })
+    }
+}
+
 /// A triangle's first vertex and edges `p1 − p0`, `p2 − p0` (as `Triangle::intersect`
 /// subtracts them), and its primitive index.
 #[derive(Clone, Copy, Debug)]
@@ -188,10 +251,6 @@ impl<'a> Wavefront<'a> {
         if backend == Backend::Avx2 && p.shadow_rays > 1 {
             return None;
         }
-        // The path tracer traces single rays by brute force exactly where the scene has a
-        // flat set (`accel::flat`: at most 64 triangles and 4 spheres); elsewhere it uses the
-        // BVH, which for a grazing ray may skip a primitive brute force would test. So the
-        // lanes, which test every primitive, match it only where it does too.
         // The lanes make pinhole rays (`Lanes::start`); a thin lens's and an orthographic
         // camera's rays are the path tracer's.
         if scene
@@ -200,19 +259,17 @@ impl<'a> Wavefront<'a> {
         {
             return None;
         }
-        let n = scene.tris.len();
-        if n == 0
-            || n > MAX_PRIMS
-            || !scene.is_flat()
-            || !scene.attrs.is_empty()
-            || scene.instances.is_some()
-        {
-            return None;
-        }
         let planar = scene.lights.single_planar()?;
+        let materials = scene
+            .materials
+            .iter()
+            .map(Shading::of)
+            .collect::<Option<Vec<_>>>()?;
         let mut w = Wavefront {
             scene,
-            tris: Vec::with_capacity(n),
+            trace: Trace::Scene,
+            materials,
+            tris: Vec::new(),
             balls: Vec::new(),
             p0: [[0.0; 64]; 3],
             p1: [[0.0; 64]; 3],
@@ -242,48 +299,56 @@ impl<'a> Wavefront<'a> {
             width: s.width,
             backend,
         };
+        if w.fill_tables() {
+            w.trace = Trace::Lanes;
+        } else {
+            (w.tris, w.balls) = (Vec::new(), Vec::new());
+        }
+        Some(w)
+    }
+
+    /// Whether the lanes trace the scene by brute force ([`Trace::Lanes`]) rather than
+    /// through its own queries: for the tests and benchmarks.
+    pub fn is_brute_force(&self) -> bool {
+        self.trace == Trace::Lanes
+    }
+
+    /// Fills the per-primitive tables that [`Trace::Lanes`] reads, if the scene is one it
+    /// takes: one the path tracer traces by brute force too (`accel::flat`: at most
+    /// [`MAX_PRIMS`] primitives), since elsewhere it uses the BVH, which for a grazing ray
+    /// may skip a primitive brute force would test; with no vertex normals (the lanes shade
+    /// with the face's), no instances and no emitting or inward-facing spheres.
+    fn fill_tables(&mut self) -> bool {
+        let scene = self.scene;
+        let n = scene.tris.len();
+        if n == 0
+            || n > MAX_PRIMS
+            || !scene.is_flat()
+            || !scene.attrs.is_empty()
+            || scene.instances.is_some()
+        {
+            return false;
+        }
         for (j, &idx) in scene.tris.iter().enumerate() {
             let meta = scene.meta[j];
-            let material = &scene.materials[(meta & META_MATERIAL) as usize];
-            if material.reads_uv() {
-                return None;
-            }
-            let (kind, colour) = match &material.bsdf {
-                Bsdf::Lambert(b) => (LAMBERT, b.albedo),
-                Bsdf::Mirror(b) => (MIRROR, b.reflectance),
-                Bsdf::Dielectric(b) => {
-                    // (Glass with factors other than 1 takes the scalar path.)
-                    if b.specular_reflectance != crate::Color::ONE
-                        || b.specular_transmittance != crate::Color::ONE
-                    {
-                        return None;
-                    }
-                    w.eta[j] = b.eta;
-                    (GLASS, crate::Color::ONE)
-                }
-                Bsdf::Black => (BLACK, crate::Color::ZERO),
-                _ => return None,
-            };
-            let mut flags = kind;
-            if material.two_sided {
-                flags |= TWO_SIDED;
-            }
+            let m = self.materials[(meta & META_MATERIAL) as usize];
+            let mut flags = m.flags;
             for c in 0..3 {
-                w.colour[c][j] = colour[c];
+                self.colour[c][j] = m.colour[c];
             }
+            self.eta[j] = m.eta;
             if idx[0] == SPHERE {
-                // (Emitting spheres are lights of their own: no scene here has one. The lanes'
-                // spheres face outwards.)
+                // (Emitting spheres are lights of their own: no scene here has one.)
                 if meta & META_EMITTER != 0 || scene.sphere_frames[idx[1] as usize].flip {
-                    return None;
+                    return false;
                 }
                 let sphere = scene.spheres[idx[1] as usize];
                 for c in 0..3 {
-                    w.p0[c][j] = sphere.center[c];
+                    self.p0[c][j] = sphere.center[c];
                 }
-                w.radius[j] = sphere.radius;
-                w.flags[j] = flags;
-                w.balls.push(Ball {
+                self.radius[j] = sphere.radius;
+                self.flags[j] = flags;
+                self.balls.push(Ball {
                     center: sphere.center.into(),
                     r2: sphere.radius * sphere.radius,
                     prim: j as u32,
@@ -293,25 +358,25 @@ impl<'a> Wavefront<'a> {
             if meta & META_EMITTER != 0 {
                 flags |= EMITTER;
             }
-            w.flags[j] = flags;
+            self.flags[j] = flags;
             let tri = scene.triangle(idx);
             // As `Triangle::intersect` and `Scene::interaction` compute them.
             let (e1, e2) = (tri.p1 - tri.p0, tri.p2 - tri.p0);
             let ng = tri.normal_unnormalized().normalize();
             for c in 0..3 {
-                w.p0[c][j] = tri.p0[c];
-                w.p1[c][j] = tri.p1[c];
-                w.p2[c][j] = tri.p2[c];
-                w.ng[c][j] = ng[c];
+                self.p0[c][j] = tri.p0[c];
+                self.p1[c][j] = tri.p1[c];
+                self.p2[c][j] = tri.p2[c];
+                self.ng[c][j] = ng[c];
             }
-            w.tris.push(Tri {
+            self.tris.push(Tri {
                 p0: tri.p0.into(),
                 e1: e1.into(),
                 e2: e2.into(),
                 prim: j as u32,
             });
         }
-        Some(w)
+        true
     }
 
     /// Renders the samples of one tile's pixels into their sums: pixel k's samples

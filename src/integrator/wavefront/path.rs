@@ -6,7 +6,7 @@ use super::bsdf;
 use super::nee::Vertex;
 use super::rng::LaneSampler;
 use super::simd::{F, M, U, V3};
-use super::{trace, Lanes, Wavefront, GROUPS};
+use super::{trace, Lanes, Trace, Wavefront, GROUPS};
 use super::{BLACK, EMITTER, GLASS, KIND, LAMBERT, MIRROR, TWO_SIDED};
 use crate::film::PixelSums;
 use crate::geometry::ray::{offset_ray_origin, SHADOW_EPSILON};
@@ -19,7 +19,83 @@ use crate::material::sampling::power_heuristic_lanes;
 use crate::simd::{Float, Vector3};
 use crate::render::{RenderStats, TilePixel};
 
+/// What a step reads of the lanes' hits: the lanes that hit something, and at their hits
+/// the point, its error bound, the unit geometric and shading normals, and the material's
+/// flags (with `EMITTER` where the primitive emits), colour and η.
+struct Surface {
+    hit: M,
+    p: V3,
+    p_err: V3,
+    ng: V3,
+    ns: V3,
+    flags: U,
+    colour: V3,
+    eta: F,
+}
+
 impl Wavefront<'_> {
+    /// The lanes' hits by brute force ([`Trace::Lanes`]).
+    ///
+    /// # Safety
+    /// The CPU must have the backend's features (`trace::closest`).
+    #[inline(always)]
+    unsafe fn surface_lanes(&self, o: V3, d: V3, active: M) -> Surface {
+        let h = trace::closest(self.scene, &self.tris, &self.balls, o, d, active);
+        let (p, p_err, ng) = self.hit_point(&h, o, d);
+        Surface {
+            hit: h.hit,
+            p,
+            p_err,
+            ng,
+            ns: ng,
+            flags: U::lookup64(&self.flags, h.prim),
+            colour: V3::lookup64(&self.colour, h.prim),
+            eta: F::lookup64(&self.eta, h.prim),
+        }
+    }
+
+    /// The lanes' hits by the scene's own queries ([`Trace::Scene`]): each lane's
+    /// `Scene::intersect`, as the path tracer traces it, and its interaction's values.
+    #[inline(always)]
+    fn surface_scene(&self, o: &[[f32; 16]; 3], d: &[[f32; 16]; 3], active: M) -> Surface {
+        let mut v = [[[0f32; 16]; 3]; 5];
+        let [p, p_err, ng, ns, colour] = &mut v;
+        let (mut flags, mut eta) = ([0u32; 16], [1f32; 16]);
+        let mut hit: M = 0;
+        let mut m = active;
+        while m != 0 {
+            let l = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let ray = crate::geometry::Ray::new(
+                glam::Vec3A::new(o[0][l], o[1][l], o[2][l]),
+                glam::Vec3A::new(d[0][l], d[1][l], d[2][l]),
+            );
+            let Some(si) = self.scene.intersect(&ray) else {
+                continue;
+            };
+            hit |= 1 << l;
+            let sh = &self.materials[si.material as usize];
+            for c in 0..3 {
+                (p[c][l], p_err[c][l]) = (si.p[c], si.p_err[c]);
+                (ng[c][l], ns[c][l]) = (si.ng[c], si.ns[c]);
+                colour[c][l] = sh.colour[c];
+            }
+            let emits = si.light != crate::scene::NO_LIGHT;
+            flags[l] = sh.flags | if emits { EMITTER } else { 0 };
+            eta[l] = sh.eta;
+        }
+        Surface {
+            hit,
+            p: V3::load(p),
+            p_err: V3::load(p_err),
+            ng: V3::load(ng),
+            ns: V3::load(ns),
+            flags: U::load(&flags),
+            colour: V3::load(colour),
+            eta: F::load(&eta),
+        }
+    }
+
     /// The hit points of `h`: `Scene::interaction`'s point, error bound and unit normal, for
     /// a triangle (`Triangle::point`) or a sphere (`Sphere::surface_point`).
     #[inline(always)]
@@ -63,7 +139,10 @@ impl Wavefront<'_> {
         let mut eta2 = F::load(&st.eta2);
         let depth = U::load(&st.depth);
         stats.rays.rays += active.count_ones() as u64;
-        let h = trace::closest(self.scene, &self.tris, &self.balls, o, d, active);
+        let sf = match self.trace {
+            Trace::Lanes => unsafe { self.surface_lanes(o, d, active) },
+            Trace::Scene => self.surface_scene(&st.o, &st.d, active),
+        };
         let hidden = if self.hide_emitters {
             depth.eq(U::splat(0))
         } else {
@@ -71,12 +150,10 @@ impl Wavefront<'_> {
         };
         // A ray that leaves the scene: these scenes have no environment light, so it adds
         // β·0, as `escaped` returns (which is not nothing where β is not finite).
-        let miss = active & !h.hit;
+        let miss = active & !sf.hit;
         l = V3::select(miss & !hidden, l + beta * V3::zero(), l);
         let mut done = miss;
-        let hit = h.hit;
-        let (p, p_err, ng) = self.hit_point(&h, o, d);
-        let flags = U::lookup64(&self.flags, h.prim);
+        let (hit, p, p_err, ng, flags) = (sf.hit, sf.p, sf.p_err, sf.ng, sf.flags);
         let kind = |k: u32| hit & flags.masked_eq(KIND, k);
         let lt = &self.light;
 
@@ -103,13 +180,13 @@ impl Wavefront<'_> {
 
         // The shading frame and `Material::orient`: the side the BSDF is seen from (glass:
         // both), none for a one-sided material seen from behind.
-        let frame = Frame::from_normal(ng);
+        let frame = Frame::from_normal(sf.ns);
         let wo = frame.to_local(nd);
         let (lambert, mirror, glass) = (kind(LAMBERT), kind(MIRROR), kind(GLASS));
         let front = wo.z.gt(zero);
         let oriented = glass | front | (wo.z.lt(zero) & flags.any(TWO_SIDED));
         let side = F::select(glass | front, one, F::splat(-1.0));
-        let colour = V3::lookup64(&self.colour, h.prim);
+        let colour = sf.colour;
 
         // Next-event estimation at the non-specular (Lambertian) vertices: with one light
         // sample, its shadow ray and the two values `l += β·lit` can add (β times the
@@ -146,7 +223,7 @@ impl Wavefront<'_> {
 
         // The BSDF sample (one request for the direction, the lobe and the roulette).
         let [ux, uy, u1, u_rr] = st.rng.next::<4>(cont);
-        let eta = F::lookup64(&self.eta, h.prim);
+        let eta = sf.eta;
         let bs = bsdf::sample(
             wo,
             [ux, uy, u1],
@@ -285,15 +362,26 @@ impl Wavefront<'_> {
                 y: F::load_at(&a[1], first),
                 z: F::load_at(&a[2], first),
             };
-            let b = trace::occluded(
-                self.scene,
-                &self.tris,
-                &self.balls,
-                v(&o),
-                v(&d),
-                t_max,
-                lanes,
-            );
+            let b = match self.trace {
+                Trace::Lanes => trace::occluded(
+                    self.scene,
+                    &self.tris,
+                    &self.balls,
+                    v(&o),
+                    v(&d),
+                    t_max,
+                    lanes,
+                ),
+                // (`spawn_ray_to`'s ray and bound, the path tracer's query.)
+                Trace::Scene => (0..16).filter(|&l| lanes >> l & 1 != 0).fold(0, |b, l| {
+                    let at = first + l;
+                    let ray = crate::geometry::Ray::new(
+                        glam::Vec3A::new(o[0][at], o[1][at], o[2][at]),
+                        glam::Vec3A::new(d[0][at], d[1][at], d[2][at]),
+                    );
+                    b | (self.scene.occluded(&ray, 1.0 - SHADOW_EPSILON) as M) << l
+                }),
+            };
             blocked |= (b as u64) << first;
         }
         let mut at = 0;
