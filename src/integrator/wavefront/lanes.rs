@@ -4,8 +4,11 @@
 use super::rng::LaneSampler;
 use crate::simd::{Float, Vector3};
 use super::simd::{F, M, U, V3};
-use super::Wavefront;
+use super::{Trace, Wavefront};
 use crate::camera::Camera;
+use crate::geometry::Ray;
+use crate::scene::Interaction;
+use glam::Vec3A;
 use crate::film::PixelSums;
 use crate::render::{RenderStats, TilePixel};
 
@@ -32,6 +35,9 @@ pub(super) struct Lanes<S> {
     pub(super) done: M,
     /// The shadow rays of the last step's light samples, waiting to be traced.
     pub(super) shadow: Shadows,
+    /// With `Trace::Scene`, the active lanes' hits, found for all groups at once before
+    /// their steps (`Wavefront::trace_groups`).
+    pub(super) hits: [Option<Interaction>; 16],
 }
 
 /// A group's shadow rays between `front` and `back` (one light sample a vertex).
@@ -90,6 +96,7 @@ impl Wavefront<'_> {
                 lit: [[0.0; 16]; 3],
                 dark: [[0.0; 16]; 3],
             },
+            hits: [None; 16],
         };
         let mut all: [Lanes<S>; GROUPS] = std::array::from_fn(|_| lanes());
         // Several light samples a vertex are traced as each lane's packets, in `front`:
@@ -102,8 +109,9 @@ impl Wavefront<'_> {
         // The next camera sample: pixel k, sample i.
         let (mut k, mut i) = (0usize, pixels.first().map_or(0, |p| p.samples.0));
         let (mut px, mut py) = ([0f32; 16], [0f32; 16]);
+        let mut rays = Vec::with_capacity(16 * GROUPS);
+        let mut hits = Vec::with_capacity(16 * GROUPS);
         loop {
-            let mut busy = false;
             for st in groups.iter_mut() {
                 // Free lanes take the next samples.
                 let mut fresh: M = 0;
@@ -129,13 +137,15 @@ impl Wavefront<'_> {
                 if fresh != 0 {
                     self.start(camera, st, fresh, &px, &py);
                 }
-                if st.active != 0 {
-                    self.front(st, stats);
-                    busy = true;
-                }
             }
-            if !busy {
+            if groups.iter().all(|st| st.active == 0) {
                 break;
+            }
+            if self.trace == Trace::Scene {
+                self.trace_groups(groups, &mut rays, &mut hits);
+            }
+            for st in groups.iter_mut().filter(|st| st.active != 0) {
+                self.front(st, stats);
             }
             self.shadows(groups);
             for st in groups.iter_mut() {
@@ -143,6 +153,42 @@ impl Wavefront<'_> {
             }
         }
     }
+    }
+
+    /// The closest hits of every group's active lanes ([`Trace::Scene`]), their rays traced
+    /// together (`Scene::intersect_many`, which interleaves them where the scene outgrows
+    /// the cache), into each group's `hits`.
+    fn trace_groups<S>(
+        &self,
+        groups: &mut [Lanes<S>],
+        rays: &mut Vec<Ray>,
+        hits: &mut Vec<Option<Interaction>>,
+    ) {
+        rays.clear();
+        for st in groups.iter() {
+            let mut m = st.active;
+            while m != 0 {
+                let l = m.trailing_zeros() as usize;
+                m &= m - 1;
+                let (o, d) = (&st.o, &st.d);
+                rays.push(Ray::new(
+                    Vec3A::new(o[0][l], o[1][l], o[2][l]),
+                    Vec3A::new(d[0][l], d[1][l], d[2][l]),
+                ));
+            }
+        }
+        hits.clear();
+        hits.resize(rays.len(), None);
+        self.scene.intersect_many(rays, hits);
+        let mut next = hits.iter();
+        for st in groups.iter_mut() {
+            let mut m = st.active;
+            while m != 0 {
+                let l = m.trailing_zeros() as usize;
+                m &= m - 1;
+                st.hits[l] = *next.next().expect("one hit per ray");
+            }
+        }
     }
 
     lanes_fn! {

@@ -7,6 +7,7 @@ use super::nee::Vertex;
 use super::rng::LaneSampler;
 use super::simd::{F, M, U, V3};
 use super::{trace, Lanes, Trace, Wavefront, GROUPS};
+use crate::scene::Interaction;
 use super::{BLACK, EMITTER, GLASS, KIND, LAMBERT, MIRROR, TWO_SIDED};
 use crate::film::PixelSums;
 use crate::geometry::ray::{offset_ray_origin, SHADOW_EPSILON};
@@ -54,10 +55,10 @@ impl Wavefront<'_> {
         }
     }
 
-    /// The lanes' hits by the scene's own queries ([`Trace::Scene`]): each lane's
-    /// `Scene::intersect`, as the path tracer traces it, and its interaction's values.
+    /// The lanes' hits by the scene's own queries ([`Trace::Scene`]): the values of each
+    /// active lane's interaction in `hits` (`Scene::intersect`'s, as the path tracer's).
     #[inline(always)]
-    fn surface_scene(&self, o: &[[f32; 16]; 3], d: &[[f32; 16]; 3], active: M) -> Surface {
+    fn surface_scene(&self, hits: &[Option<Interaction>; 16], active: M) -> Surface {
         let mut v = [[[0f32; 16]; 3]; 5];
         let [p, p_err, ng, ns, colour] = &mut v;
         let (mut flags, mut eta) = ([0u32; 16], [1f32; 16]);
@@ -66,11 +67,7 @@ impl Wavefront<'_> {
         while m != 0 {
             let l = m.trailing_zeros() as usize;
             m &= m - 1;
-            let ray = crate::geometry::Ray::new(
-                glam::Vec3A::new(o[0][l], o[1][l], o[2][l]),
-                glam::Vec3A::new(d[0][l], d[1][l], d[2][l]),
-            );
-            let Some(si) = self.scene.intersect(&ray) else {
+            let Some(si) = &hits[l] else {
                 continue;
             };
             hit |= 1 << l;
@@ -141,7 +138,7 @@ impl Wavefront<'_> {
         stats.rays.rays += active.count_ones() as u64;
         let sf = match self.trace {
             Trace::Lanes => unsafe { self.surface_lanes(o, d, active) },
-            Trace::Scene => self.surface_scene(&st.o, &st.d, active),
+            Trace::Scene => self.surface_scene(&st.hits, active),
         };
         let hidden = if self.hide_emitters {
             depth.eq(U::splat(0))
@@ -349,6 +346,31 @@ impl Wavefront<'_> {
             n += sh.lanes.count_ones() as usize;
         }
         // Their answers, a bit a ray.
+        let blocked = match self.trace {
+            Trace::Lanes => self.occluded_lanes(&o, &d, n),
+            Trace::Scene => self.occluded_scene(&o, &d, n),
+        };
+        let mut at = 0;
+        for g in groups.iter_mut() {
+            let sh = &mut g.shadow;
+            sh.blocked = _pdep_u64(blocked >> at, sh.lanes as u64) as M;
+            at += sh.lanes.count_ones();
+        }
+    }
+    }
+
+    /// Which of the `n` packed shadow rays are blocked, a bit a ray, sixteen at a time
+    /// against every primitive ([`Trace::Lanes`]).
+    ///
+    /// # Safety
+    /// The CPU must have the backend's features (`trace::occluded`).
+    #[inline(always)]
+    unsafe fn occluded_lanes<const ROOM: usize>(
+        &self,
+        o: &[[f32; ROOM]; 3],
+        d: &[[f32; ROOM]; 3],
+        n: usize,
+    ) -> u64 {
         let mut blocked = 0u64;
         let t_max = F::splat(1.0 - SHADOW_EPSILON);
         for first in (0..n).step_by(16) {
@@ -357,39 +379,45 @@ impl Wavefront<'_> {
             } else {
                 (1 << (n - first)) - 1
             };
-            let v = |a: &[[f32; ROOM + 16]; 3]| V3 {
+            let v = |a: &[[f32; ROOM]; 3]| V3 {
                 x: F::load_at(&a[0], first),
                 y: F::load_at(&a[1], first),
                 z: F::load_at(&a[2], first),
             };
-            let b = match self.trace {
-                Trace::Lanes => trace::occluded(
-                    self.scene,
-                    &self.tris,
-                    &self.balls,
-                    v(&o),
-                    v(&d),
-                    t_max,
-                    lanes,
-                ),
-                // (`spawn_ray_to`'s ray and bound, the path tracer's query.)
-                Trace::Scene => (0..16).filter(|&l| lanes >> l & 1 != 0).fold(0, |b, l| {
-                    let at = first + l;
-                    let ray = crate::geometry::Ray::new(
-                        glam::Vec3A::new(o[0][at], o[1][at], o[2][at]),
-                        glam::Vec3A::new(d[0][at], d[1][at], d[2][at]),
-                    );
-                    b | (self.scene.occluded(&ray, 1.0 - SHADOW_EPSILON) as M) << l
-                }),
-            };
+            let b = trace::occluded(
+                self.scene,
+                &self.tris,
+                &self.balls,
+                v(o),
+                v(d),
+                t_max,
+                lanes,
+            );
             blocked |= (b as u64) << first;
         }
-        let mut at = 0;
-        for g in groups.iter_mut() {
-            let sh = &mut g.shadow;
-            sh.blocked = _pdep_u64(blocked >> at, sh.lanes as u64) as M;
-            at += sh.lanes.count_ones();
-        }
+        blocked
     }
+
+    /// Which of the `n` packed shadow rays are blocked, a bit a ray, by the scene's own
+    /// query ([`Trace::Scene`]): `spawn_ray_to`'s rays, clear up to 1 − `SHADOW_EPSILON`,
+    /// traced together (`Scene::occluded_many`, interleaved where the scene outgrows the
+    /// cache).
+    #[inline(always)]
+    fn occluded_scene<const ROOM: usize>(
+        &self,
+        o: &[[f32; ROOM]; 3],
+        d: &[[f32; ROOM]; 3],
+        n: usize,
+    ) -> u64 {
+        let ray = |k: usize| {
+            let v = |a: &[[f32; ROOM]; 3]| glam::Vec3A::new(a[0][k], a[1][k], a[2][k]);
+            crate::geometry::Ray::new(v(o), v(d))
+        };
+        let rays: [crate::geometry::Ray; ROOM] = std::array::from_fn(ray);
+        let t_max = [1.0 - SHADOW_EPSILON; ROOM];
+        let mut out = [false; ROOM];
+        self.scene
+            .occluded_many(&rays[..n], &t_max[..n], &mut out[..n]);
+        (0..n).fold(0, |b, k| b | (out[k] as u64) << k)
     }
 }
