@@ -40,6 +40,12 @@ pub trait Float:
     fn max_num(self, o: Self) -> Self;
     /// `f32::min` against an `o` that is not NaN (`o` where `self` is NaN).
     fn min_num(self, o: Self) -> Self;
+    /// C's `fmax`, as `f32::max`: the larger, or where one side is NaN the other.
+    #[inline(always)]
+    fn fmax(self, o: Self) -> Self {
+        // (`o.max_num(self)` is `self` where `o` is NaN; NaN fails `self == self`.)
+        Self::select(self.eq(self), o.max_num(self), o)
+    }
     /// The magnitude of `self` with the sign bit of `sign`.
     fn copysign(self, sign: Self) -> Self;
     /// Ordered comparisons: false where either side is NaN.
@@ -76,6 +82,12 @@ pub trait Vector3:
     fn abs(self) -> Self;
     /// The unit vector: each component divided by the length (glam's SSE `normalize`).
     fn normalize(self) -> Self;
+    /// The largest component, as glam's `Vec3::max_element`: x.max(y.max(z)) with
+    /// `f32::max`.
+    #[inline(always)]
+    fn max_element(self) -> Self::F {
+        self.x().fmax(self.y().fmax(self.z()))
+    }
 }
 
 /// The lane mask of a vector type.
@@ -105,6 +117,10 @@ macro_rules! one_lane {
             #[inline(always)]
             fn min_num(self, o: $t) -> $t {
                 <$t>::min(self, o)
+            }
+            #[inline(always)]
+            fn fmax(self, o: $t) -> $t {
+                <$t>::max(self, o)
             }
             #[inline(always)]
             fn copysign(self, sign: $t) -> $t {

@@ -45,6 +45,7 @@ use crate::material::sampling::power_heuristic;
 use crate::render::{Backend, RenderError, RenderSettings, RenderStats, TilePixel};
 use crate::sampler::Sampler;
 use crate::scene::{Interaction, Scene};
+use crate::simd::{Float, Mask, Vector3};
 use crate::Color;
 use glam::Vec3A;
 #[cfg(target_arch = "x86_64")]
@@ -88,6 +89,35 @@ pub enum RussianRoulette {
     /// Survive every bounce with this fixed probability p: 1/(1 − p) bounces on average, as in
     /// the TNCG15 report.
     Fixed(f32),
+}
+
+impl RussianRoulette {
+    /// The roulette after a vertex, over any lanes (written once for the one-path loop,
+    /// [`path::PathState::step`], and the wavefront's lanes): the lanes whose path survives,
+    /// and there its throughput `beta` divided by the survival probability. `eta2` is the
+    /// η² gathered over refractions (the throughput rule undoes radiance scaling with it),
+    /// `deep(start)` the lanes whose path has made at least `start` bounces (asked by the
+    /// throughput rule only), `u` the vertex's roulette number.
+    #[inline(always)]
+    pub(crate) fn play<V: Vector3>(
+        self,
+        beta: V,
+        eta2: V::F,
+        deep: impl FnOnce(u32) -> Mask<V>,
+        u: V::F,
+    ) -> (Mask<V>, V) {
+        match self {
+            RussianRoulette::Fixed(q) => {
+                let q = V::F::splat(q);
+                (!u.ge(q), beta.div(q))
+            }
+            RussianRoulette::Throughput { start } => {
+                let plays = deep(start);
+                let q = (beta.max_element() * eta2).min_num(V::F::splat(0.95));
+                (!(plays & u.ge(q)), V::select(plays, beta.div(q), beta))
+            }
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug)]

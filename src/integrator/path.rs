@@ -1,7 +1,7 @@
 //! Path tracing with next-event estimation, MIS and Russian roulette (Kajiya 1986; Veach 1997
 //! ch. 9; the structure follows pbrt-v4's `PathIntegrator` and Mitsuba 3's `path`).
 
-use super::{emitted, escaped, sample_lights, IntegratorParams, RayStats, RussianRoulette};
+use super::{emitted, escaped, sample_lights, IntegratorParams, RayStats};
 use crate::camera::Camera;
 use crate::film::PixelSums;
 use crate::geometry::{Frame, Ray};
@@ -201,23 +201,12 @@ impl PathState {
         let wi = frame.to_world(bs.wi);
         self.ray = si.spawn_ray(wi);
         self.depth += 1;
-        match p.rr {
-            RussianRoulette::Fixed(q) => {
-                if u_rr >= q {
-                    return false;
-                }
-                self.beta /= q;
-            }
-            RussianRoulette::Throughput { start } => {
-                if self.depth >= start {
-                    let q = (self.beta.max_element() * self.eta2).min(0.95);
-                    if u_rr >= q {
-                        return false;
-                    }
-                    self.beta /= q;
-                }
-            }
+        let (survives, beta) =
+            p.rr.play(self.beta, self.eta2, |start| self.depth >= start, u_rr);
+        if !survives {
+            return false;
         }
+        self.beta = beta;
         self.beta != Color::ZERO
     }
 }

@@ -14,7 +14,6 @@ use crate::geometry::ray::{offset_ray_origin, SHADOW_EPSILON};
 use crate::geometry::sphere::surface_point;
 use crate::geometry::triangle::barycentric_point;
 use crate::geometry::Frame;
-use crate::integrator::RussianRoulette;
 use crate::light::area_pdf;
 use crate::material::sampling::power_heuristic_lanes;
 use crate::simd::{Float, Vector3};
@@ -238,19 +237,9 @@ impl Wavefront<'_> {
         let no = offset_ray_origin(p, p_err, ng, wi);
         let depth = depth.add(U::splat(1));
         // Russian roulette.
-        match self.rr {
-            RussianRoulette::Fixed(q) => {
-                let q = F::splat(q);
-                alive &= !u_rr.ge(q);
-                beta = V3::select(alive, beta.div(q), beta);
-            }
-            RussianRoulette::Throughput { start } => {
-                let plays = alive & depth.ge(U::splat(start));
-                let q = (beta.max_element() * eta2).min_num(F::splat(0.95));
-                alive &= !(plays & u_rr.ge(q));
-                beta = V3::select(plays & alive, beta.div(q), beta);
-            }
-        }
+        let (survives, rr_beta) = self.rr.play(beta, eta2, |s| depth.ge(U::splat(s)), u_rr);
+        alive &= survives;
+        beta = V3::select(alive, rr_beta, beta);
         alive &= !beta.is_zero();
         done |= cont & !alive;
 

@@ -47,13 +47,6 @@ impl F {
         self.store(&mut a);
         a
     }
-    /// `f32::max` of two numbers either of which may be NaN: the other where one is.
-    #[inline(always)]
-    pub fn max_num2(self, o: F) -> F {
-        // maxps(o, self) is self where either is NaN; where self is, o.
-        let m = F(unsafe { _mm512_max_ps(o.0, self.0) });
-        F::select(self.is_nan(), o, m)
-    }
     #[inline(always)]
     pub fn is_nan(self) -> M {
         unsafe { _mm512_cmp_ps_mask::<_CMP_UNORD_Q>(self.0, self.0) }

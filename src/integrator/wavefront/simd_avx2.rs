@@ -80,13 +80,6 @@ impl F {
         self.store(&mut a);
         a
     }
-    /// `f32::max` of two numbers either of which may be NaN: the other where one is.
-    #[inline(always)]
-    pub fn max_num2(self, o: F) -> F {
-        // maxps(o, self) is self where either is NaN; where self is, o.
-        let m = F(both!(h => unsafe { _mm256_max_ps(o.0[h], self.0[h]) }));
-        F::select(self.is_nan(), o, m)
-    }
     #[inline(always)]
     pub fn is_nan(self) -> M {
         mask_of(both!(h => unsafe { _mm256_cmp_ps::<_CMP_UNORD_Q>(self.0[h], self.0[h]) }))

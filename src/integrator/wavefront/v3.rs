@@ -26,11 +26,6 @@ impl V3 {
     pub fn is_finite(self) -> M {
         self.x.is_finite() & self.y.is_finite() & self.z.is_finite()
     }
-    /// `Vec3::max_element`: x.max(y.max(z)) with `f32::max`.
-    #[inline(always)]
-    pub fn max_element(self) -> F {
-        self.x.max_num2(self.y.max_num2(self.z))
-    }
     /// Lane i of each component's table.
     #[inline(always)]
     pub fn lookup64(table: &[[f32; 64]; 3], idx: U) -> V3 {
