@@ -694,6 +694,26 @@ fn traced_through_the_scene_both_ways() {
             &format!("smooth meshes, {n} shadow rays, {rr:?}"),
         );
     }
+    // Instances of a group (a smooth glass ball and a white one), rotated, scaled, mirrored.
+    let grouped = |ball: String| ball.replacen("[[shape]]\n", "[[shape]]\ngroup = \"balls\"\n", 1);
+    let text = SPECULAR.to_string()
+        + &grouped(smooth_ball([0.0, 0.0, 0.0], 0.2, "glass", 6, 10))
+        + &grouped(smooth_ball([0.3, 0.1, 0.0], 0.1, "white", 4, 8))
+        + "[[instance]]\ngroup = \"balls\"\ntranslate = [0.9, 1.3, -0.5]\n"
+        + "[[instance]]\ngroup = \"balls\"\nscale = [1.5, 0.8, 1.2]\nrotate = [0, 1, 1, 40]\ntranslate = [-1.0, 1.4, -0.8]\n"
+        + "[[instance]]\ngroup = \"balls\"\nscale = [-1, 1, 1]\ntranslate = [0.2, 1.9, -1.3]\n";
+    let scene = scene_from(&text);
+    assert!(scene.instancing_summary().is_some(), "the scene has instances");
+    let s = settings(
+        &scene,
+        FileSettings {
+            width: Some(31),
+            height: Some(27),
+            spp: Some(4),
+            ..Default::default()
+        },
+    );
+    same_both_ways(scene, &s, "instances");
     // The Cornell box through its BVH rather than by brute force, at every path length.
     for depth in [1, 2, 5] {
         let scene = cornell().without_flat();
