@@ -694,6 +694,29 @@ fn traced_through_the_scene_both_ways() {
             &format!("smooth meshes, {n} shadow rays, {rr:?}"),
         );
     }
+    // Textured Lambertian and mirror colours (looked up at each hit).
+    let text = SPECULAR
+        .replace(
+            "[material.white]\ntype = \"lambert\"\nalbedo = [0.8, 0.8, 0.8]",
+            "[texture.checks]\ntype = \"checkerboard\"\ncolor0 = [0.8, 0.7, 0.2]\ncolor1 = [0.1, 0.3, 0.6]\nuv_scale = [5, 3]\n[material.white]\ntype = \"lambert\"\nalbedo = \"checks\"",
+        )
+        .replace(
+            "[material.mirror2]\ntype = \"mirror\"\nreflectance = [0.6, 0.9, 0.9]",
+            "[texture.stripes]\ntype = \"checkerboard\"\ncolor0 = [0.9, 0.9, 0.9]\ncolor1 = [0.3, 0.6, 0.3]\nuv_scale = [8, 1]\n[material.mirror2]\ntype = \"mirror\"\nreflectance = \"stripes\"",
+        );
+    let scene = scene_from(&text);
+    let s = settings(
+        &scene,
+        FileSettings {
+            width: Some(33),
+            height: Some(25),
+            spp: Some(4),
+            ..Default::default()
+        },
+    );
+    let w = Wavefront::new(&scene, &s);
+    assert!(w.is_some_and(|w| !w.is_brute_force()), "textures");
+    same_both_ways(scene, &s, "textured colours");
     // Instances of a group (a smooth glass ball and a white one), rotated, scaled, mirrored.
     let grouped = |ball: String| ball.replacen("[[shape]]\n", "[[shape]]\ngroup = \"balls\"\n", 1);
     let text = SPECULAR.to_string()
@@ -703,7 +726,10 @@ fn traced_through_the_scene_both_ways() {
         + "[[instance]]\ngroup = \"balls\"\nscale = [1.5, 0.8, 1.2]\nrotate = [0, 1, 1, 40]\ntranslate = [-1.0, 1.4, -0.8]\n"
         + "[[instance]]\ngroup = \"balls\"\nscale = [-1, 1, 1]\ntranslate = [0.2, 1.9, -1.3]\n";
     let scene = scene_from(&text);
-    assert!(scene.instancing_summary().is_some(), "the scene has instances");
+    assert!(
+        scene.instancing_summary().is_some(),
+        "the scene has instances"
+    );
     let s = settings(
         &scene,
         FileSettings {
@@ -756,6 +782,12 @@ fn declines_what_it_does_not_do() {
     let mut s = base.clone();
     s.params.shadow_rays = 0;
     assert!(Wavefront::new(&scene, &s).is_none(), "no shadow ray");
+    // What brute force does not take, the lanes trace through the scene's own queries.
+    let through_scene = |what: &str, scene: &Scene| {
+        let s = settings(scene, FileSettings::default());
+        let w = Wavefront::new(scene, &s);
+        assert!(w.is_some_and(|w| !w.is_brute_force()), "{what}");
+    };
     let declined = |what: &str, text: &str| {
         let scene = scene_from(text);
         let s = settings(&scene, FileSettings::default());
@@ -786,19 +818,13 @@ vertices = [[2, 0.1, 0], [2, 0.1, 1], [2, 1, 0]]
             "type = \"conductor\"\nmaterial = \"Au\"",
         ),
     );
-    declined(
+    through_scene(
         "a texture",
-        &OPEN.replace(
+        &scene_from(&OPEN.replace(
             "[material.board]\ntype = \"lambert\"\nalbedo = [0.9, 0.2, 0.2]",
             "[texture.checks]\ntype = \"checkerboard\"\ncolor0 = [0.1, 0.1, 0.1]\ncolor1 = [0.9, 0.9, 0.9]\n[material.board]\ntype = \"lambert\"\nalbedo = \"checks\"",
-        ),
+        )),
     );
-    // What brute force does not take, the lanes trace through the scene's own queries.
-    let through_scene = |what: &str, scene: &Scene| {
-        let s = settings(scene, FileSettings::default());
-        let w = Wavefront::new(scene, &s);
-        assert!(w.is_some_and(|w| !w.is_brute_force()), "{what}");
-    };
     through_scene("the BVH traces", &cornell().without_flat());
     let mesh = |normals: &str| {
         OPEN.to_string()

@@ -35,8 +35,9 @@
 //! branch (what is still the lanes' own: the brute-force traversal, the material dispatch by
 //! masks, the roulette).
 //!
-//! The scenes it takes ([`Wavefront::new`]): every material Lambertian (one- or two-sided,
-//! untextured), a mirror (untextured), smooth glass or black, none with a normal or bump
+//! The scenes it takes ([`Wavefront::new`]): every material Lambertian (one- or two-sided),
+//! a mirror, smooth glass or black, their colours constant or textured (looked up at each
+//! hit as `Scene::material_at` does, so not with brute force), none with a normal or bump
 //! map; one light, a triangle or a parallelogram of constant radiance; a pinhole or
 //! perspective camera; the `path` integrator, any number of shadow rays (one only with
 //! AVX2), either sampler. The Cornell box, the TNCG15 room and the Cornell box with the
@@ -158,22 +159,45 @@ enum Trace {
 }
 
 /// What the lanes read of a material: the flags of a primitive (`KIND`, `TWO_SIDED`), the
-/// colour (Lambertian albedo, mirror reflectance) and relative index of refraction (glass).
+/// colour (Lambertian albedo, mirror reflectance) and relative index of refraction (glass);
+/// whether the colour is a texture's, to be looked up at each hit ([`Trace::Scene`] only),
+/// and whether the material is an opacity mask (which the scene's queries see through).
 #[derive(Clone, Copy, Debug)]
 struct Shading {
     flags: u32,
     colour: [f32; 3],
     eta: f32,
+    textured: bool,
+    masked: bool,
 }
 
 impl Shading {
-    /// The material as the lanes shade it, if they do: untextured, unperturbed Lambertian,
-    /// mirror, smooth glass of unit factors, or black.
+    /// The material as the lanes shade it, if they do: a Lambertian, a mirror, smooth glass
+    /// of unit factors, or black; colours constant or textured; no normal or bump map.
     fn of(material: &crate::material::Material) -> Option<Shading> {
-        if material.reads_uv() || material.perturbs() {
+        if material.perturbs() || material.mix.is_some() {
             return None;
         }
-        let (kind, colour, eta) = match &material.bsdf {
+        let textured = !material.slots.is_empty();
+        let (kind, colour, eta) = Self::bsdf(&material.bsdf)?;
+        // (Glass's textured factors would not be the unit ones the lanes assume.)
+        if textured && kind == GLASS {
+            return None;
+        }
+        let two_sided = if material.two_sided { TWO_SIDED } else { 0 };
+        Some(Shading {
+            flags: kind | two_sided,
+            colour,
+            eta,
+            textured,
+            masked: material.opacity.is_some(),
+        })
+    }
+
+    /// The kind, colour and η of a BSDF the lanes shade (a blend is not one of them).
+    #[inline(always)]
+    fn bsdf(bsdf: &Bsdf) -> Option<(u32, [f32; 3], f32)> {
+        let (kind, colour, eta) = match bsdf {
             Bsdf::Lambert(b) => (LAMBERT, b.albedo, 1.0),
             Bsdf::Mirror(b) => (MIRROR, b.reflectance, 1.0),
             Bsdf::Dielectric(b) => {
@@ -188,12 +212,22 @@ impl Shading {
             Bsdf::Black => (BLACK, crate::Color::ZERO, 1.0),
             _ => return None,
         };
-        let two_sided = if material.two_sided { TWO_SIDED } else { 0 };
-        Some(Shading {
-            flags: kind | two_sided,
-            colour: colour.into(),
-            eta,
-        })
+        Some((kind, colour.into(), eta))
+    }
+
+    /// The colour at a hit with texture coordinates `uv` on `material` (this one's): its
+    /// textured parameters evaluated there, as `Scene::material_at` evaluates them.
+    #[inline(always)]
+    fn colour_at(
+        &self,
+        material: &crate::material::Material,
+        textures: &[crate::texture::Texture],
+        uv: glam::Vec2,
+    ) -> [f32; 3] {
+        if !self.textured {
+            return self.colour;
+        }
+        Self::bsdf(&material.bsdf_at(textures, uv)).map_or(self.colour, |(_, c, _)| c)
     }
 }
 
@@ -317,7 +351,7 @@ impl<'a> Wavefront<'a> {
     /// takes: one the path tracer traces by brute force too (`accel::flat`: at most
     /// [`MAX_PRIMS`] primitives), since elsewhere it uses the BVH, which for a grazing ray
     /// may skip a primitive brute force would test; with no vertex normals (the lanes shade
-    /// with the face's), no instances and no emitting or inward-facing spheres.
+    /// with the face's), no textures, no instances and no emitting or inward-facing spheres.
     fn fill_tables(&mut self) -> bool {
         let scene = self.scene;
         let n = scene.tris.len();
@@ -332,6 +366,10 @@ impl<'a> Wavefront<'a> {
         for (j, &idx) in scene.tris.iter().enumerate() {
             let meta = scene.meta[j];
             let m = self.materials[(meta & META_MATERIAL) as usize];
+            // (Brute force reads no texture coordinates and sees every surface.)
+            if m.textured || m.masked {
+                return false;
+            }
             let mut flags = m.flags;
             for c in 0..3 {
                 self.colour[c][j] = m.colour[c];

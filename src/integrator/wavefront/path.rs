@@ -71,10 +71,12 @@ impl Wavefront<'_> {
             };
             hit |= 1 << l;
             let sh = &self.materials[si.material as usize];
-            for c in 0..3 {
-                (p[c][l], p_err[c][l]) = (si.p[c], si.p_err[c]);
-                (ng[c][l], ns[c][l]) = (si.ng[c], si.ns[c]);
-                colour[c][l] = sh.colour[c];
+            let material = &self.scene.materials[si.material as usize];
+            let c = sh.colour_at(material, &self.scene.textures, si.uv);
+            for a in 0..3 {
+                (p[a][l], p_err[a][l]) = (si.p[a], si.p_err[a]);
+                (ng[a][l], ns[a][l]) = (si.ng[a], si.ns[a]);
+                colour[a][l] = c[a];
             }
             let emits = si.light != crate::scene::NO_LIGHT;
             flags[l] = sh.flags | if emits { EMITTER } else { 0 };
