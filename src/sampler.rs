@@ -5,7 +5,7 @@
 //! sample count give the same bits on any thread count.
 
 use glam::Vec2;
-use sobol_burley::parts::{hash, owen_scramble_rev};
+use std::ops::{BitAnd, BitOr, BitXor};
 
 /// SplitMix64 finaliser (Steele et al., "Fast Splittable Pseudorandom Number Generators",
 /// OOPSLA 2014): a bijective 64-bit mix used to derive independent stream states.
@@ -44,7 +44,7 @@ impl SamplerKind {
 /// 1D or 2D requests of a camera sample drawn from Sobol sequences; later ones (deep path
 /// vertices, where stratification no longer pays for its cost) use PCG32. 32 covers the
 /// camera and the first vertices with a few shadow rays each.
-const SOBOL_DIMS: u32 = 32;
+pub(crate) const SOBOL_DIMS: u32 = 32;
 /// Sample indices the Sobol sequence covers; further samples of a pixel are independent.
 const SOBOL_SAMPLES: u64 = 1 << 16;
 
@@ -156,19 +156,15 @@ impl Sampler {
     #[inline(never)]
     fn sobol_1d(&mut self) -> f32 {
         let (idx, seed) = self.shuffled_index();
-        let x = owen_scramble_rev(sobol_rev_fast(idx, 0), hash(seed ^ 0x912f_69ba));
-        sobol_burley::parts::u32_to_f32_norm(x.reverse_bits())
+        to_unit(scrambled(sobol_rev_fast(idx, 0), seed, 0))
     }
 
     #[inline(never)]
     fn sobol_2d(&mut self) -> Vec2 {
         let (idx, seed) = self.shuffled_index();
-        let x = owen_scramble_rev(sobol_rev_fast(idx, 0), hash(seed ^ 0x912f_69ba));
-        let y = owen_scramble_rev(sobol_rev_fast(idx, 1), hash(seed ^ 0x174f_18ab));
-        Vec2::new(
-            sobol_burley::parts::u32_to_f32_norm(x.reverse_bits()),
-            sobol_burley::parts::u32_to_f32_norm(y.reverse_bits()),
-        )
+        let x = scrambled(sobol_rev_fast(idx, 0), seed, 0);
+        let y = scrambled(sobol_rev_fast(idx, 1), seed, 1);
+        Vec2::new(to_unit(x), to_unit(y))
     }
 
     #[inline(never)]
@@ -188,23 +184,128 @@ impl Sampler {
         scramble_4d(sobol, seed)
     }
 
-    /// The bit-reversed sample index, Owen-scrambled with this request's seed (a random
-    /// permutation of the pixel's samples that keeps power-of-two prefixes stratified), and
-    /// the seed.
+    /// This request's shuffled sample index and seed ([`shuffled`]).
     #[inline]
     fn shuffled_index(&mut self) -> (u32, u32) {
-        let seed = hash(self.seed ^ DIM_HASH[self.dim as usize]);
+        let dim = self.dim as usize;
         self.dim += 1;
-        // Only the top 16 reversed bits are used by Sobol (2^16 samples at most).
-        (
-            owen_scramble_rev(self.index.reverse_bits(), hash(seed ^ 0x79c6_8e4a)) & 0xffff_0000,
-            seed,
-        )
+        shuffled(self.seed, DIM_HASH[dim], self.index)
+    }
+
+    /// With Sobol points, the sample's index and seed and the requests it has made (for
+    /// the wavefront's lanes, which continue its requests); None for independent numbers.
+    #[inline]
+    pub(crate) fn sobol_words(&self) -> Option<(u32, u32, u32)> {
+        self.sobol.then_some((self.index, self.seed, self.dim))
     }
 }
 
+/// Unsigned 32-bit integer lanes, `u32` or a SIMD vector of them, for the Sobol points'
+/// scrambling written once ([`hash`], [`owen_scramble_rev`], [`reverse_bits`]) for one
+/// camera sample here and sixteen in the wavefront's lanes
+/// (`integrator::wavefront::rng::Sobol16`). Every operation wraps, lane by lane.
+pub(crate) trait Uint:
+    Copy + BitXor<Output = Self> + BitOr<Output = Self> + BitAnd<Output = Self>
+{
+    fn splat(x: u32) -> Self;
+    fn wrapping_add(self, o: Self) -> Self;
+    fn wrapping_mul(self, o: Self) -> Self;
+    fn shr<const K: u32>(self) -> Self;
+    fn shl<const K: u32>(self) -> Self;
+}
+
+impl Uint for u32 {
+    #[inline(always)]
+    fn splat(x: u32) -> u32 {
+        x
+    }
+    #[inline(always)]
+    fn wrapping_add(self, o: u32) -> u32 {
+        u32::wrapping_add(self, o)
+    }
+    #[inline(always)]
+    fn wrapping_mul(self, o: u32) -> u32 {
+        u32::wrapping_mul(self, o)
+    }
+    #[inline(always)]
+    fn shr<const K: u32>(self) -> u32 {
+        self >> K
+    }
+    #[inline(always)]
+    fn shl<const K: u32>(self) -> u32 {
+        self << K
+    }
+}
+
+/// Burley's integer hash (`sobol_burley::parts::hash`).
+#[inline(always)]
+pub(crate) fn hash<U: Uint>(n: U) -> U {
+    let mut n = n ^ U::splat(0xe6fe_3beb); // so that zero does not map to zero
+    n = n ^ n.shr::<16>();
+    n = n.wrapping_mul(U::splat(0x7feb_352d));
+    n = n ^ n.shr::<15>();
+    n = n.wrapping_mul(U::splat(0x846c_a68b));
+    n ^ n.shr::<16>()
+}
+
+/// Owen scrambling of a bit-reversed number by a hash-based permutation (Burley 2020, §3;
+/// `sobol_burley::parts::owen_scramble_rev`).
+#[inline(always)]
+pub(crate) fn owen_scramble_rev<U: Uint>(n: U, scramble: U) -> U {
+    let mut n = n ^ n.wrapping_mul(U::splat(0x3d20_adea));
+    n = n.wrapping_add(scramble);
+    n = n.wrapping_mul(scramble.shr::<16>() | U::splat(1));
+    n = n ^ n.wrapping_mul(U::splat(0x0552_6c56));
+    n ^ n.wrapping_mul(U::splat(0x53a2_2864))
+}
+
+/// The bits of each lane in reverse order (`u32::reverse_bits`): neighbours, pairs,
+/// nibbles, bytes and halves swapped.
+#[inline(always)]
+pub(crate) fn reverse_bits<U: Uint>(n: U) -> U {
+    let swap = |n: U, k: u32, lo: u32| match k {
+        1 => (n.shr::<1>() & U::splat(lo)) | (n & U::splat(lo)).shl::<1>(),
+        2 => (n.shr::<2>() & U::splat(lo)) | (n & U::splat(lo)).shl::<2>(),
+        4 => (n.shr::<4>() & U::splat(lo)) | (n & U::splat(lo)).shl::<4>(),
+        _ => (n.shr::<8>() & U::splat(lo)) | (n & U::splat(lo)).shl::<8>(),
+    };
+    let n = swap(n, 1, 0x5555_5555);
+    let n = swap(n, 2, 0x3333_3333);
+    let n = swap(n, 4, 0x0f0f_0f0f);
+    let n = swap(n, 8, 0x00ff_00ff);
+    n.shr::<16>() | n.shl::<16>()
+}
+
+/// Request `dim`'s seed for a camera sample of seed `seed`, and the sample's index within
+/// the request's sequence: its bit-reversed `index`, Owen-scrambled with that seed (a
+/// random permutation of the pixel's samples that keeps power-of-two prefixes
+/// stratified), of which only the top 16 bits are used (2^16 samples at most).
+#[inline(always)]
+pub(crate) fn shuffled<U: Uint>(seed: U, dim_hash: U, index: U) -> (U, U) {
+    let seed = hash(seed ^ dim_hash);
+    let idx = owen_scramble_rev(reverse_bits(index), hash(seed ^ U::splat(0x79c6_8e4a)));
+    (idx & U::splat(0xffff_0000), seed)
+}
+
+/// Dimension `d` (< 4) of a request's Sobol point: `sobol` (the reversed coordinate,
+/// [`sobol_rev_fast`]) scrambled by the request's `seed`, bits in order. The uniform number
+/// is [`to_unit`] of it.
+#[inline(always)]
+pub(crate) fn scrambled<U: Uint>(sobol: U, seed: U, d: usize) -> U {
+    reverse_bits(owen_scramble_rev(
+        sobol,
+        hash(seed ^ U::splat(SCRAMBLE_4D[d])),
+    ))
+}
+
+/// A number's top 23 bits as a float in [0, 1) (`sobol_burley::parts::u32_to_f32_norm`).
+#[inline(always)]
+fn to_unit(n: u32) -> f32 {
+    f32::from_bits((n >> 9) | 0x3f80_0000) - 1.0
+}
+
 /// hash(d + 0x9e3779b9) for every Sobol request d: the per-request seed mixes it in.
-const DIM_HASH: [u32; SOBOL_DIMS as usize] = {
+pub(crate) const DIM_HASH: [u32; SOBOL_DIMS as usize] = {
     let mut t = [0; SOBOL_DIMS as usize];
     let mut d = 0;
     while d < SOBOL_DIMS as usize {
@@ -229,22 +330,18 @@ const fn hash_const(mut n: u32) -> u32 {
 /// the index bits, so the top two bytes of the index (all that 2^16 samples use) contribute
 /// independently. The crate walks the set bits one by one, the dearest part of a sample.
 #[inline(always)]
-fn sobol_rev_fast(i: u32, d: usize) -> u32 {
+pub(crate) fn sobol_rev_fast(i: u32, d: usize) -> u32 {
     let t = sobol4_tables();
     t[0][(i >> 24) as usize][d] ^ t[1][((i >> 16) & 0xff) as usize][d]
 }
 
 /// Owen-scrambles the four reversed Sobol coordinates of a request with seed `seed` (one
-/// hashed scramble per lane) and maps them to [0, 1): sobol_burley's own SIMD parts, which
-/// on x86-64 emulate the 32-bit multiplies with SSE2.
+/// hashed scramble per dimension, [`scrambled`]) and maps them to [0, 1).
 fn scramble_4d(sobol: [u32; 4], seed: u32) -> [f32; 4] {
-    use sobol_burley::parts::{hash_int4, owen_scramble_int4_rev, Int4};
-    let scramble = Int4::from([seed; 4]) ^ Int4::from(SCRAMBLE_4D);
-    owen_scramble_int4_rev(Int4::from(sobol), hash_int4(scramble))
-        .reverse_bits()
-        .to_f32_norm()
+    std::array::from_fn(|d| to_unit(scrambled(sobol[d], seed, d)))
 }
 
+/// The constants that make each dimension's scramble of a request its own.
 const SCRAMBLE_4D: [u32; 4] = [0x912f_69ba, 0x174f_18ab, 0x691e_72ca, 0xb40c_c1b8];
 
 /// `scramble_4d` with SSE4.1's 32-bit multiply and SSSE3's byte shuffle (chosen at run time,
@@ -301,7 +398,7 @@ mod sse41 {
 
 /// Sobol dimensions 0–3 (reversed) of each value of the index's top byte, `[0]`, and of its
 /// second byte, `[1]`: the index's contribution is the XOR of the two.
-fn sobol4_tables() -> &'static [[[u32; 4]; 256]; 2] {
+pub(crate) fn sobol4_tables() -> &'static [[[u32; 4]; 256]; 2] {
     static TABLES: std::sync::OnceLock<[[[u32; 4]; 256]; 2]> = std::sync::OnceLock::new();
     TABLES.get_or_init(|| {
         let byte = |shift: u32| {

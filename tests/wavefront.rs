@@ -406,6 +406,44 @@ fn crop_and_passes_both_ways() {
     assert_eq!(wide, one);
 }
 
+/// Sobol points in the lanes across the sampler's limits: samples on both sides of its
+/// last Sobol index (2^16; later samples draw PCG32 numbers only) and paths long enough to
+/// outrun its Sobol requests (32; later requests draw PCG32 numbers), in one pass each way.
+#[test]
+fn sobol_limits_both_ways() {
+    if !cpu_runs_it() {
+        return;
+    }
+    use mcrt::integrator::RussianRoulette;
+    let scene = scene_from(SPECULAR);
+    let mut s = settings(
+        &scene,
+        FileSettings {
+            width: Some(23),
+            height: Some(19),
+            seed: Some(77),
+            ..Default::default()
+        },
+    );
+    s.sampler = mcrt::sampler::SamplerKind::Sobol;
+    s.params.max_depth = Some(40);
+    s.params.rr = RussianRoulette::Fixed(0.97);
+    assert!(Wavefront::new(&scene, &s).is_some());
+    let (first, count) = ((1 << 16) - 3, 6);
+    let mut wide = Film::new(23, 19);
+    render_samples(&scene, &s, &mut wide, first, count, &|_| {}).unwrap();
+    let scalar = with_backend(&s, Backend::Scalar);
+    let mut one = Film::new(23, 19);
+    render_samples(&scene, &scalar, &mut one, first, count, &|_| {}).unwrap();
+    assert_eq!(wide, one);
+    if cpu_has_avx512() {
+        let mut narrow = Film::new(23, 19);
+        let avx2 = with_backend(&s, Backend::Avx2);
+        render_samples(&scene, &avx2, &mut narrow, first, count, &|_| {}).unwrap();
+        assert_eq!(narrow, one, "AVX2");
+    }
+}
+
 /// The TNCG15 room (two spheres, one diffuse and one of glass, a mirror wall, two-sided
 /// walls, a parallelogram light) from both eyes: one shadow ray and the throughput
 /// roulette; ten shadow rays and the fixed roulette of the report's Figure 3.3; Sobol points.

@@ -43,7 +43,7 @@ impl Wavefront<'_> {
     ) {
         match self.sampler {
             SamplerKind::Independent => self.run(rng::Pcg16::new(), camera, pixels, sums, stats),
-            _ => self.run(rng::Samplers16::new(), camera, pixels, sums, stats),
+            SamplerKind::Sobol => self.run(rng::Sobol16::new(), camera, pixels, sums, stats),
         }
     }
 }

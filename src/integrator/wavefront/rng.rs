@@ -3,11 +3,12 @@
 //!
 //! - [`Pcg16`]: the independent sampler's PCG32 streams ([`crate::sampler::Pcg32`]), as
 //!   the lanes' backend steps them ([`pcg32`]).
-//! - [`Samplers16`]: any sampler (Owen-scrambled Sobol points), one `Sampler` a lane, each
-//!   request answered lane by lane.
+//! - [`Sobol16`]: the Sobol sampler's Owen-scrambled points, scrambled in the lanes, with
+//!   the PCG32 streams beside them.
 
 use crate::simd::Float;
 use super::simd::{pcg32, F, M, U};
+use crate::sampler::{scrambled, shuffled, sobol4_tables, Uint, DIM_HASH, SOBOL_DIMS};
 use crate::sampler::{Sampler, SamplerKind};
 
 /// The numbers of sixteen camera samples.
@@ -70,53 +71,78 @@ impl LaneSampler for Pcg16 {
     }
 }
 
-/// Sixteen `Sampler`s, for the samplers whose numbers are not lane arithmetic.
+/// Sixteen camera samples' Owen-scrambled Sobol points, computed in the lanes with the
+/// sampler's own maths (`crate::sampler`'s `shuffled` and `scrambled`, written once over
+/// integer lanes), and each lane's PCG32 stream for what the sampler draws from it (the
+/// requests past its Sobol dimensions, the samples past its Sobol indices).
 #[derive(Clone)]
-pub struct Samplers16 {
-    lanes: [Sampler; 16],
+pub struct Sobol16 {
+    index: [u32; 16],
+    seed: [u32; 16],
+    /// Requests made so far.
+    dim: [u32; 16],
+    /// Lanes whose sample draws Sobol points at all.
+    sobol: M,
+    pcg: Pcg16,
 }
 
-impl Samplers16 {
-    pub fn new() -> Samplers16 {
-        Samplers16 {
-            lanes: std::array::from_fn(|_| Sampler::from_state(0, 0)),
+impl Sobol16 {
+    pub fn new() -> Sobol16 {
+        Sobol16 {
+            index: [0; 16],
+            seed: [0; 16],
+            dim: [0; 16],
+            sobol: 0,
+            pcg: Pcg16::new(),
         }
     }
 }
 
-impl LaneSampler for Samplers16 {
+impl LaneSampler for Sobol16 {
     fn start(&mut self, lane: usize, kind: SamplerKind, seed: u64, pixel: u64, index: u64) {
-        self.lanes[lane] = Sampler::for_sample(kind, seed, pixel, index);
+        let s = Sampler::for_sample(kind, seed, pixel, index);
+        (self.pcg.state[lane], self.pcg.inc[lane]) = s.pcg_words();
+        match s.sobol_words() {
+            Some((i, seed, dim)) => {
+                (self.index[lane], self.seed[lane], self.dim[lane]) = (i, seed, dim);
+                self.sobol |= 1 << lane;
+            }
+            None => self.sobol &= !(1 << lane),
+        }
     }
 
+    /// `Sampler::next_2d`, `next_3d` and `next_4d`: with Sobol points, dimensions 0 to N − 1
+    /// of the request's own scrambled sequence (`sobol_4d`), else N PCG32 numbers.
     #[inline(always)]
     unsafe fn next<const N: usize>(&mut self, m: M) -> [F; N] {
-        debug_assert!((2..=4).contains(&N));
-        let mut v = [[0f32; 16]; N];
-        let mut mm = m;
-        while mm != 0 {
-            let l = mm.trailing_zeros() as usize;
-            mm &= mm - 1;
-            let s = &mut self.lanes[l];
-            match N {
-                2 => {
-                    let u = s.next_2d();
-                    (v[0][l], v[1 % N][l]) = (u.x, u.y);
-                }
-                3 => {
-                    let u = s.next_3d();
-                    for (k, x) in u.into_iter().enumerate() {
-                        v[k % N][l] = x;
-                    }
-                }
-                _ => {
-                    let u = s.next_4d();
-                    for (k, x) in u.into_iter().enumerate() {
-                        v[k % N][l] = x;
-                    }
-                }
-            }
+        let dim = U::load(&self.dim);
+        let s = m & self.sobol & dim.lt(U::splat(SOBOL_DIMS));
+        let mut out = [F::zero(); N];
+        if s != m {
+            out = self.pcg.next::<N>(m & !s);
         }
-        v.map(|a| F::load(&a))
+        if s == 0 {
+            return out;
+        }
+        let (idx, seed) = shuffled(
+            U::load(&self.seed),
+            U::gather(&DIM_HASH, dim, s),
+            U::load(&self.index),
+        );
+        // `sobol_rev_fast`: the tables of the index's top two bytes, four words an entry.
+        let t = sobol4_tables();
+        let (t0, t1) = (t[0].as_flattened(), t[1].as_flattened());
+        let hi = idx.shr::<24>().shl::<2>();
+        let lo = (idx.shr::<16>() & U::splat(0xff)).shl::<2>();
+        for (d, x) in out.iter_mut().enumerate() {
+            let at = U::splat(d as u32);
+            let sobol = U::gather(t0, hi.add(at), s) ^ U::gather(t1, lo.add(at), s);
+            let n = scrambled(sobol, seed, d);
+            // `to_unit`: the top 23 bits as the mantissa of a float in [1, 2), minus one.
+            let f = (n.shr::<9>() | U::splat(0x3f80_0000)).to_bits_f32() - F::splat(1.0);
+            *x = F::select(s, f, *x);
+        }
+        U::select(s, dim.add(U::splat(1)), dim).store(&mut self.dim);
+        out
     }
 }

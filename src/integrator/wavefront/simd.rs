@@ -13,9 +13,10 @@
 //! built on them (`bsdf`, `nee`, `path`), is made inside such a function, which runs only
 //! where `Backend::detect` found the features. `simd_avx2.rs` is the same interface on AVX2.
 
+use crate::sampler::Uint;
 use crate::simd::Float;
 use std::arch::x86_64::*;
-use std::ops::{Add, BitAnd, Div, Mul, Neg, Sub};
+use std::ops::{Add, BitAnd, BitOr, BitXor, Div, Mul, Neg, Sub};
 
 /// A mask of lanes, bit i for lane i.
 pub type M = u16;
@@ -292,6 +293,64 @@ impl BitAnd for U {
     #[inline(always)]
     fn bitand(self, o: U) -> U {
         U(unsafe { _mm512_and_si512(self.0, o.0) })
+    }
+}
+impl BitOr for U {
+    type Output = U;
+    #[inline(always)]
+    fn bitor(self, o: U) -> U {
+        U(unsafe { _mm512_or_si512(self.0, o.0) })
+    }
+}
+impl BitXor for U {
+    type Output = U;
+    #[inline(always)]
+    fn bitxor(self, o: U) -> U {
+        U(unsafe { _mm512_xor_si512(self.0, o.0) })
+    }
+}
+
+impl Uint for U {
+    #[inline(always)]
+    fn splat(x: u32) -> U {
+        U::splat(x)
+    }
+    #[inline(always)]
+    fn wrapping_add(self, o: U) -> U {
+        self.add(o)
+    }
+    #[inline(always)]
+    fn wrapping_mul(self, o: U) -> U {
+        U(unsafe { _mm512_mullo_epi32(self.0, o.0) })
+    }
+    #[inline(always)]
+    fn shr<const K: u32>(self) -> U {
+        U::shr::<K>(self)
+    }
+    #[inline(always)]
+    fn shl<const K: u32>(self) -> U {
+        U(unsafe { _mm512_slli_epi32::<K>(self.0) })
+    }
+}
+
+impl U {
+    /// `table[idx]` in each lane of `m` (zero in the others).
+    ///
+    /// # Safety
+    /// Every index of the lanes of `m` must be below `table.len()`.
+    #[inline(always)]
+    pub unsafe fn gather(table: &[u32], idx: U, m: M) -> U {
+        U(_mm512_mask_i32gather_epi32::<4>(
+            _mm512_setzero_si512(),
+            m,
+            idx.0,
+            table.as_ptr() as *const _,
+        ))
+    }
+    /// The lanes' bits as f32.
+    #[inline(always)]
+    pub fn to_bits_f32(self) -> F {
+        F(unsafe { _mm512_castsi512_ps(self.0) })
     }
 }
 

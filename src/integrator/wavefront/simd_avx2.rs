@@ -9,9 +9,10 @@
 //! every call is made inside a function compiled for AVX2 (`lanes_fn!` in `avx2.rs`), which
 //! runs only where `Backend::detect` found the features.
 
+use crate::sampler::Uint;
 use crate::simd::Float;
 use std::arch::x86_64::*;
-use std::ops::{Add, BitAnd, Div, Mul, Neg, Sub};
+use std::ops::{Add, BitAnd, BitOr, BitXor, Div, Mul, Neg, Sub};
 
 /// A mask of lanes, bit i for lane i.
 pub type M = u16;
@@ -325,6 +326,64 @@ impl BitAnd for U {
     #[inline(always)]
     fn bitand(self, o: U) -> U {
         U(both!(h => unsafe { _mm256_and_si256(self.0[h], o.0[h]) }))
+    }
+}
+impl BitOr for U {
+    type Output = U;
+    #[inline(always)]
+    fn bitor(self, o: U) -> U {
+        U(both!(h => unsafe { _mm256_or_si256(self.0[h], o.0[h]) }))
+    }
+}
+impl BitXor for U {
+    type Output = U;
+    #[inline(always)]
+    fn bitxor(self, o: U) -> U {
+        U(both!(h => unsafe { _mm256_xor_si256(self.0[h], o.0[h]) }))
+    }
+}
+
+impl Uint for U {
+    #[inline(always)]
+    fn splat(x: u32) -> U {
+        U::splat(x)
+    }
+    #[inline(always)]
+    fn wrapping_add(self, o: U) -> U {
+        self.add(o)
+    }
+    #[inline(always)]
+    fn wrapping_mul(self, o: U) -> U {
+        U(both!(h => unsafe { _mm256_mullo_epi32(self.0[h], o.0[h]) }))
+    }
+    #[inline(always)]
+    fn shr<const K: u32>(self) -> U {
+        U::shr::<K>(self)
+    }
+    #[inline(always)]
+    fn shl<const K: u32>(self) -> U {
+        U(both!(h => unsafe { _mm256_sll_epi32(self.0[h], _mm_cvtsi32_si128(K as i32)) }))
+    }
+}
+
+impl U {
+    /// `table[idx]` in each lane of `m` (zero in the others).
+    ///
+    /// # Safety
+    /// Every index of the lanes of `m` must be below `table.len()`.
+    #[inline(always)]
+    pub unsafe fn gather(table: &[u32], idx: U, m: M) -> U {
+        U(both!(h => _mm256_mask_i32gather_epi32::<4>(
+            _mm256_setzero_si256(),
+            table.as_ptr() as *const i32,
+            idx.0[h],
+            lanes_of(m, h),
+        )))
+    }
+    /// The lanes' bits as f32.
+    #[inline(always)]
+    pub fn to_bits_f32(self) -> F {
+        F(both!(h => unsafe { _mm256_castsi256_ps(self.0[h]) }))
     }
 }
 
