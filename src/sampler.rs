@@ -156,14 +156,14 @@ impl Sampler {
     #[inline(never)]
     fn sobol_1d(&mut self) -> f32 {
         let (idx, seed) = self.shuffled_index();
-        to_unit(scrambled(sobol_rev_fast(idx, 0), seed, 0))
+        to_unit(scrambled(sobol_rev_fast(idx, 0), seed, SCRAMBLE_4D[0]))
     }
 
     #[inline(never)]
     fn sobol_2d(&mut self) -> Vec2 {
         let (idx, seed) = self.shuffled_index();
-        let x = scrambled(sobol_rev_fast(idx, 0), seed, 0);
-        let y = scrambled(sobol_rev_fast(idx, 1), seed, 1);
+        let x = scrambled(sobol_rev_fast(idx, 0), seed, SCRAMBLE_4D[0]);
+        let y = scrambled(sobol_rev_fast(idx, 1), seed, SCRAMBLE_4D[1]);
         Vec2::new(to_unit(x), to_unit(y))
     }
 
@@ -212,6 +212,12 @@ pub(crate) trait Uint:
     fn wrapping_mul(self, o: Self) -> Self;
     fn shr<const K: u32>(self) -> Self;
     fn shl<const K: u32>(self) -> Self;
+    /// The bits of each lane in reverse order (`u32::reverse_bits`); lane types with a
+    /// faster way than [`reverse_bits_by_swaps`] give their own.
+    #[inline(always)]
+    fn reverse_bits(self) -> Self {
+        reverse_bits_by_swaps(self)
+    }
 }
 
 impl Uint for u32 {
@@ -234,6 +240,10 @@ impl Uint for u32 {
     #[inline(always)]
     fn shl<const K: u32>(self) -> u32 {
         self << K
+    }
+    #[inline(always)]
+    fn reverse_bits(self) -> u32 {
+        u32::reverse_bits(self)
     }
 }
 
@@ -262,7 +272,7 @@ pub(crate) fn owen_scramble_rev<U: Uint>(n: U, scramble: U) -> U {
 /// The bits of each lane in reverse order (`u32::reverse_bits`): neighbours, pairs,
 /// nibbles, bytes and halves swapped.
 #[inline(always)]
-pub(crate) fn reverse_bits<U: Uint>(n: U) -> U {
+pub(crate) fn reverse_bits_by_swaps<U: Uint>(n: U) -> U {
     let swap = |n: U, k: u32, lo: u32| match k {
         1 => (n.shr::<1>() & U::splat(lo)) | (n & U::splat(lo)).shl::<1>(),
         2 => (n.shr::<2>() & U::splat(lo)) | (n & U::splat(lo)).shl::<2>(),
@@ -283,24 +293,21 @@ pub(crate) fn reverse_bits<U: Uint>(n: U) -> U {
 #[inline(always)]
 pub(crate) fn shuffled<U: Uint>(seed: U, dim_hash: U, index: U) -> (U, U) {
     let seed = hash(seed ^ dim_hash);
-    let idx = owen_scramble_rev(reverse_bits(index), hash(seed ^ U::splat(0x79c6_8e4a)));
+    let idx = owen_scramble_rev(index.reverse_bits(), hash(seed ^ U::splat(0x79c6_8e4a)));
     (idx & U::splat(0xffff_0000), seed)
 }
 
-/// Dimension `d` (< 4) of a request's Sobol point: `sobol` (the reversed coordinate,
-/// [`sobol_rev_fast`]) scrambled by the request's `seed`, bits in order. The uniform number
-/// is [`to_unit`] of it.
+/// A coordinate of a request's Sobol point: `sobol` (the reversed coordinate,
+/// [`sobol_rev_fast`]) scrambled by the request's `seed` mixed with the dimension's constant
+/// `k` (of [`SCRAMBLE_4D`]), bits in order. The uniform number is [`to_unit`] of it.
 #[inline(always)]
-pub(crate) fn scrambled<U: Uint>(sobol: U, seed: U, d: usize) -> U {
-    reverse_bits(owen_scramble_rev(
-        sobol,
-        hash(seed ^ U::splat(SCRAMBLE_4D[d])),
-    ))
+pub(crate) fn scrambled<U: Uint>(sobol: U, seed: U, k: U) -> U {
+    owen_scramble_rev(sobol, hash(seed ^ k)).reverse_bits()
 }
 
 /// A number's top 23 bits as a float in [0, 1) (`sobol_burley::parts::u32_to_f32_norm`).
 #[inline(always)]
-fn to_unit(n: u32) -> f32 {
+pub(crate) fn to_unit(n: u32) -> f32 {
     f32::from_bits((n >> 9) | 0x3f80_0000) - 1.0
 }
 
@@ -338,61 +345,98 @@ pub(crate) fn sobol_rev_fast(i: u32, d: usize) -> u32 {
 /// Owen-scrambles the four reversed Sobol coordinates of a request with seed `seed` (one
 /// hashed scramble per dimension, [`scrambled`]) and maps them to [0, 1).
 fn scramble_4d(sobol: [u32; 4], seed: u32) -> [f32; 4] {
-    std::array::from_fn(|d| to_unit(scrambled(sobol[d], seed, d)))
+    std::array::from_fn(|d| to_unit(scrambled(sobol[d], seed, SCRAMBLE_4D[d])))
 }
 
 /// The constants that make each dimension's scramble of a request its own.
-const SCRAMBLE_4D: [u32; 4] = [0x912f_69ba, 0x174f_18ab, 0x691e_72ca, 0xb40c_c1b8];
+pub(crate) const SCRAMBLE_4D: [u32; 4] = [0x912f_69ba, 0x174f_18ab, 0x691e_72ca, 0xb40c_c1b8];
 
-/// `scramble_4d` with SSE4.1's 32-bit multiply and SSSE3's byte shuffle (chosen at run time,
-/// so the binary still runs on any x86-64): the same bits, in about a third of the
-/// instructions.
+/// `scramble_4d` four lanes at once in an SSE register, with SSE4.1's 32-bit multiply and
+/// SSSE3's byte shuffle for the bit reversal (chosen at run time, so the binary still runs on
+/// any x86-64): the same bits, in about a third of the instructions.
 #[cfg(target_arch = "x86_64")]
 mod sse41 {
+    use super::{scrambled, to_unit, Uint, SCRAMBLE_4D};
     use std::arch::x86_64::*;
+    use std::ops::{BitAnd, BitOr, BitXor};
+
+    /// Four u32 lanes. (SAFETY of the `unsafe` blocks: SSE2 is part of x86-64; the SSE4.1
+    /// and SSSE3 intrinsics run only inside `scramble_4d`, whose caller checked for them.)
+    #[derive(Clone, Copy)]
+    struct I4(__m128i);
+
+    impl BitAnd for I4 {
+        type Output = I4;
+        #[inline(always)]
+        fn bitand(self, o: I4) -> I4 {
+            I4(unsafe { _mm_and_si128(self.0, o.0) })
+        }
+    }
+    impl BitOr for I4 {
+        type Output = I4;
+        #[inline(always)]
+        fn bitor(self, o: I4) -> I4 {
+            I4(unsafe { _mm_or_si128(self.0, o.0) })
+        }
+    }
+    impl BitXor for I4 {
+        type Output = I4;
+        #[inline(always)]
+        fn bitxor(self, o: I4) -> I4 {
+            I4(unsafe { _mm_xor_si128(self.0, o.0) })
+        }
+    }
+
+    impl Uint for I4 {
+        #[inline(always)]
+        fn splat(x: u32) -> I4 {
+            I4(unsafe { _mm_set1_epi32(x as i32) })
+        }
+        #[inline(always)]
+        fn wrapping_add(self, o: I4) -> I4 {
+            I4(unsafe { _mm_add_epi32(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn wrapping_mul(self, o: I4) -> I4 {
+            I4(unsafe { _mm_mullo_epi32(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn shr<const K: u32>(self) -> I4 {
+            I4(unsafe { _mm_srl_epi32(self.0, _mm_cvtsi32_si128(K as i32)) })
+        }
+        #[inline(always)]
+        fn shl<const K: u32>(self) -> I4 {
+            I4(unsafe { _mm_sll_epi32(self.0, _mm_cvtsi32_si128(K as i32)) })
+        }
+        /// The bytes of each lane by one shuffle, the bits of each byte by a lookup of its
+        /// two nibbles, reversed and swapped.
+        #[inline(always)]
+        fn reverse_bits(self) -> I4 {
+            unsafe {
+                let n = _mm_shuffle_epi8(
+                    self.0,
+                    _mm_setr_epi8(3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12),
+                );
+                let rev_nibble =
+                    _mm_setr_epi8(0, 8, 4, 12, 2, 10, 6, 14, 1, 9, 5, 13, 3, 11, 7, 15);
+                let low = _mm_set1_epi8(0x0f);
+                let lo = _mm_and_si128(n, low);
+                let hi = _mm_and_si128(_mm_srli_epi16::<4>(n), low);
+                I4(_mm_or_si128(
+                    _mm_slli_epi16::<4>(_mm_shuffle_epi8(rev_nibble, lo)),
+                    _mm_shuffle_epi8(rev_nibble, hi),
+                ))
+            }
+        }
+    }
 
     #[target_feature(enable = "sse4.1,ssse3")]
     pub unsafe fn scramble_4d(sobol: [u32; 4], seed: u32) -> [f32; 4] {
-        let c = |x: u32| _mm_set1_epi32(x as i32);
-        let k = super::SCRAMBLE_4D.map(|x| x as i32);
-        // hash (sobol_burley::parts::hash) of seed ^ the lane's constant.
-        let mut s = _mm_xor_si128(c(seed), _mm_setr_epi32(k[0], k[1], k[2], k[3]));
-        s = _mm_xor_si128(s, c(0xe6fe_3beb));
-        s = _mm_xor_si128(s, _mm_srli_epi32::<16>(s));
-        s = _mm_mullo_epi32(s, c(0x7feb_352d));
-        s = _mm_xor_si128(s, _mm_srli_epi32::<15>(s));
-        s = _mm_mullo_epi32(s, c(0x846c_a68b));
-        s = _mm_xor_si128(s, _mm_srli_epi32::<16>(s));
-        // owen_scramble_rev.
-        let mut n = _mm_loadu_si128(sobol.as_ptr() as *const __m128i);
-        n = _mm_xor_si128(n, _mm_mullo_epi32(n, c(0x3d20_adea)));
-        n = _mm_add_epi32(n, s);
-        n = _mm_mullo_epi32(n, _mm_or_si128(_mm_srli_epi32::<16>(s), c(1)));
-        n = _mm_xor_si128(n, _mm_mullo_epi32(n, c(0x0552_6c56)));
-        n = _mm_xor_si128(n, _mm_mullo_epi32(n, c(0x53a2_2864)));
-        // reverse_bits: the bytes of each lane by one shuffle, the bits of each byte by a
-        // lookup of its two nibbles, reversed and swapped.
-        n = _mm_shuffle_epi8(
-            n,
-            _mm_setr_epi8(3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12),
-        );
-        let rev_nibble = _mm_setr_epi8(0, 8, 4, 12, 2, 10, 6, 14, 1, 9, 5, 13, 3, 11, 7, 15);
-        let low = _mm_set1_epi8(0x0f);
-        let lo = _mm_and_si128(n, low);
-        let hi = _mm_and_si128(_mm_srli_epi16::<4>(n), low);
-        n = _mm_or_si128(
-            _mm_slli_epi16::<4>(_mm_shuffle_epi8(rev_nibble, lo)),
-            _mm_shuffle_epi8(rev_nibble, hi),
-        );
-        // u32_to_f32_norm: the top 23 bits as the mantissa of a float in [1, 2), minus one.
-        let one = _mm_castsi128_ps(c(0x3f80_0000));
-        let f = _mm_sub_ps(
-            _mm_castsi128_ps(_mm_or_si128(_mm_srli_epi32::<9>(n), c(0x3f80_0000))),
-            one,
-        );
-        let mut out = [0f32; 4];
-        _mm_storeu_ps(out.as_mut_ptr(), f);
-        out
+        let load = |a: [u32; 4]| I4(_mm_loadu_si128(a.as_ptr() as *const __m128i));
+        let n = scrambled(load(sobol), I4::splat(seed), load(SCRAMBLE_4D));
+        let mut out = [0u32; 4];
+        _mm_storeu_si128(out.as_mut_ptr() as *mut __m128i, n.0);
+        out.map(to_unit)
     }
 }
 

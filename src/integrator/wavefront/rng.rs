@@ -8,7 +8,8 @@
 
 use crate::simd::Float;
 use super::simd::{pcg32, F, M, U};
-use crate::sampler::{scrambled, shuffled, sobol4_tables, Uint, DIM_HASH, SOBOL_DIMS};
+use crate::sampler::{scrambled, shuffled, sobol4_tables, Uint, DIM_HASH, SCRAMBLE_4D};
+use crate::sampler::SOBOL_DIMS;
 use crate::sampler::{Sampler, SamplerKind};
 
 /// The numbers of sixteen camera samples.
@@ -137,7 +138,7 @@ impl LaneSampler for Sobol16 {
         for (d, x) in out.iter_mut().enumerate() {
             let at = U::splat(d as u32);
             let sobol = U::gather(t0, hi.add(at), s) ^ U::gather(t1, lo.add(at), s);
-            let n = scrambled(sobol, seed, d);
+            let n = scrambled(sobol, seed, U::splat(SCRAMBLE_4D[d]));
             // `to_unit`: the top 23 bits as the mantissa of a float in [1, 2), minus one.
             let f = (n.shr::<9>() | U::splat(0x3f80_0000)).to_bits_f32() - F::splat(1.0);
             *x = F::select(s, f, *x);
