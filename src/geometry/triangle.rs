@@ -19,6 +19,13 @@ pub struct Triangle {
 /// Barycentric coordinates closer than this to an edge are recomputed in f64.
 const EDGE_EPS: f32 = 1e-4;
 
+/// The lanes of u·det and v·det in [`Triangle::intersect`]'s four dot products...
+const UV_LANES: glam::BVec4A = glam::BVec4A::from_array([false, true, true, false]);
+/// ...and the bounds of the others for its early misses: none for det (NaN compares false),
+/// and for t·det the least positive float, below which (and not NaN) is at most 0, as
+/// neither Rust nor mcrt sets the CPU to read subnormals as zero.
+const T_LANE: Vec4 = Vec4::new(f32::NAN, 0.0, 0.0, f32::from_bits(1));
+
 /// The x + y + z sums of four products: lane i is (a_i.x + a_i.y) + a_i.z, the order of
 /// glam's `Vec3A::dot`, so each equals the dot product it replaces bit for bit. A 4×4
 /// transpose and two additions instead of four horizontal sums (the fourth lanes, whatever
@@ -86,10 +93,10 @@ impl Triangle {
         // (Times ±1 is exact: it is the sign flip.)
         let flipped = dots * 1f32.copysign(det);
         let bound = -EDGE_EPS * det.abs();
-        let nan = f32::NAN;
-        let below = flipped.cmplt(Vec4::new(nan, bound, bound, nan));
-        let not_ahead = flipped.cmple(Vec4::new(nan, nan, nan, 0.0));
-        if (below | not_ahead).any() {
+        if flipped
+            .cmplt(Vec4::select(UV_LANES, Vec4::splat(bound), T_LANE))
+            .any()
+        {
             return None;
         }
         let inv_det = 1.0 / det;
