@@ -416,7 +416,7 @@ impl Scene {
                 light,
             };
             if meta & META_ATTRS != 0 && self.materials[material as usize].perturbs() {
-                self.perturb_triangle(&mut si, ray, &tri, uv3, tangent);
+                si = self.perturb_triangle(si, ray, &tri, uv3, tangent);
             }
             si
         } else {
@@ -446,7 +446,7 @@ impl Scene {
                 light,
             };
             if mat.perturbs() {
-                self.perturb_sphere(&mut si, ray, s.radius, frame);
+                si = self.perturb_sphere(si, ray, s.radius, frame);
             }
             si
         }
