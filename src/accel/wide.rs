@@ -48,27 +48,28 @@ macro_rules! closest_step {
                     $next
                 }
                 // Three or four: sorted by entry distance, farthest pushed first.
-                let mut order = [(0f32, 0u32); 4];
-                order[0] = (t[a], node.child[a]);
-                order[1] = (t[b], node.child[b]);
-                let mut n = 2;
-                while mask != 0 {
-                    let s = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    order[n] = (t[s], node.child[s]);
-                    n += 1;
+                let c = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                let four = mask != 0;
+                // (`& 3`: a slot index even where the mask is empty.)
+                let d = (mask.trailing_zeros() & 3) as usize;
+                let mut k = [
+                    child_key(t[a], node.child[a]),
+                    child_key(t[b], node.child[b]),
+                    child_key(t[c], node.child[c]),
+                    if four {
+                        child_key(t[d], node.child[d])
+                    } else {
+                        u64::MAX
+                    },
+                ];
+                sort4(&mut k);
+                if four {
+                    $stack.push(child_of_key(k[3]));
                 }
-                for i in 1..n {
-                    let mut j = i;
-                    while j > 0 && order[j - 1].0 < order[j].0 {
-                        order.swap(j - 1, j);
-                        j -= 1;
-                    }
-                }
-                for &(tc, c) in &order[..n - 1] {
-                    $stack.push((c, tc));
-                }
-                $cur = order[n - 1].1;
+                $stack.push(child_of_key(k[2]));
+                $stack.push(child_of_key(k[1]));
+                $cur = child_of_key(k[0]).0;
                 $next
             }
         }
@@ -85,6 +86,33 @@ macro_rules! closest_step {
             }
         }
     }};
+}
+
+/// A child and its entry distance as one key that orders as the distance: entry distances
+/// are non-negative (`RayBoxes::test` takes them from 0 up, and a NaN lane becomes 0), and
+/// non-negative floats order as their bits.
+#[inline(always)]
+fn child_key(t: f32, child: ChildRef) -> u64 {
+    (u64::from(t.to_bits()) << 32) | u64::from(child)
+}
+
+/// [`child_key`]'s child and entry distance, as the closest-hit stack holds them.
+#[inline(always)]
+fn child_of_key(k: u64) -> (ChildRef, f32) {
+    (k as u32, f32::from_bits((k >> 32) as u32))
+}
+
+/// Sorts four keys, ascending, by a sorting network (Knuth, TAOCP vol. 3, §5.3.4): five
+/// compare-exchanges, each a compare and two conditional moves, where the insertion sort
+/// it replaces branched on every comparison. (Of equally distant children either order
+/// gives the same closest hit: see `Scene::keep_nearer`.)
+#[inline(always)]
+fn sort4(k: &mut [u64; 4]) {
+    for (i, j) in [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)] {
+        let (lo, hi) = (k[i].min(k[j]), k[i].max(k[j]));
+        k[i] = lo;
+        k[j] = hi;
+    }
 }
 
 /// One step of the occlusion traversal: the box test of node `$cur`'s children (the first
@@ -345,7 +373,8 @@ impl WideBvh {
             return false;
         }
         let r = RayBoxes::new(ray);
-        let mut stack = Stack::<(u32, f32)>::new();
+        let mut items = [std::mem::MaybeUninit::uninit(); STACK];
+        let mut stack = LocalStack::<(u32, f32)>::new(&mut items);
         let mut cur = self.root;
         let mut found = false;
         'trav: loop {
@@ -376,7 +405,8 @@ impl WideBvh {
             return false;
         }
         let r = RayBoxes::new(ray);
-        let mut stack = Stack::<u32>::new();
+        let mut items = [std::mem::MaybeUninit::uninit(); STACK];
+        let mut stack = LocalStack::<u32>::new(&mut items);
         let mut cur = self.root;
         'trav: loop {
             any_step!(
@@ -614,40 +644,71 @@ impl RayBoxes {
 /// The traversal stack (of child references, with their entry distances for the closest
 /// hit). The binary tree is at most `bvh::MAX_DEPTH` deep, so a wide node path is too, and
 /// each level leaves at most three siblings behind: 3 × MAX_DEPTH entries suffice. Left
-/// uninitialised: zeroing it cost 4 % of all instructions per ray.
+/// uninitialised: zeroing it cost 4 % of all instructions per ray. This form holds its
+/// items, for the traversals in flight of [`stream`]; a single ray's loop has a
+/// [`LocalStack`].
 struct Stack<T: Copy> {
-    items: [std::mem::MaybeUninit<T>; STACK],
+    items: Items<T>,
     len: usize,
 }
+
+/// The items of a traversal stack.
+type Items<T> = [std::mem::MaybeUninit<T>; STACK];
 
 const STACK: usize = 3 * super::bvh::MAX_DEPTH;
 
 impl<T: Copy> Stack<T> {
     #[inline(always)]
-    fn new() -> Self {
-        // Built in place from an uninitialised whole: initialising `len` as a field next to
-        // the uninitialised items let LLVM merge both into one memset of the whole stack.
-        let mut s = std::mem::MaybeUninit::<Stack<T>>::uninit();
-        // SAFETY: `len` is written before use; the items are MaybeUninit and need nothing.
-        unsafe {
-            std::ptr::addr_of_mut!((*s.as_mut_ptr()).len).write(0);
-            s.assume_init()
-        }
-    }
-    #[inline(always)]
     fn push(&mut self, v: T) {
-        self.items[self.len] = std::mem::MaybeUninit::new(v);
-        self.len += 1;
+        push(&mut self.items, &mut self.len, v);
     }
     #[inline(always)]
     fn pop(&mut self) -> Option<T> {
-        if self.len == 0 {
-            return None;
-        }
-        self.len -= 1;
-        // SAFETY: every slot below `len` was written by `push`.
-        Some(unsafe { self.items.get_unchecked(self.len).assume_init() })
+        pop(&self.items, &mut self.len)
     }
+}
+
+/// A single ray's traversal stack, its items in an array of their own: next to an array
+/// indexed at run time, as in [`Stack`], the length stayed in memory (LLVM's scalar
+/// replacement does not split an aggregate accessed at a variable offset), a load and a
+/// store at every push and pop; here it lives in a register.
+struct LocalStack<'a, T: Copy> {
+    items: &'a mut Items<T>,
+    len: usize,
+}
+
+impl<'a, T: Copy> LocalStack<'a, T> {
+    #[inline(always)]
+    /// An empty stack on `items` (uninitialised: see [`Stack`]).
+    fn new(items: &'a mut Items<T>) -> Self {
+        LocalStack { items, len: 0 }
+    }
+    #[inline(always)]
+    fn push(&mut self, v: T) {
+        push(self.items, &mut self.len, v);
+    }
+    #[inline(always)]
+    fn pop(&mut self) -> Option<T> {
+        pop(self.items, &mut self.len)
+    }
+}
+
+/// Pushes `v` on the stack of `items` below `len`.
+#[inline(always)]
+fn push<T: Copy>(items: &mut Items<T>, len: &mut usize, v: T) {
+    items[*len] = std::mem::MaybeUninit::new(v);
+    *len += 1;
+}
+
+/// Pops the top of the stack of `items` below `len`, if any.
+#[inline(always)]
+fn pop<T: Copy>(items: &Items<T>, len: &mut usize) -> Option<T> {
+    if *len == 0 {
+        return None;
+    }
+    *len -= 1;
+    // SAFETY: every slot below `len` was written by `push`.
+    Some(unsafe { items.get_unchecked(*len).assume_init() })
 }
 
 #[cfg(test)]

@@ -14,34 +14,41 @@ impl Scene {
     /// coordinates `uvs`, if its mesh has them) with a normal- or bump-mapped material;
     /// `tangent` is the interpolated vertex tangent (glTF's TANGENT), where the mesh has
     /// them and the material a normal map.
+    ///
+    /// `si` is taken and given back by value: through a reference, the caller's interaction
+    /// lived in memory on every hit, and was copied twice more on its way out of
+    /// [`Scene::intersect`]; so, it is copied only on this path.
     #[cold]
     pub(super) fn perturb_triangle(
         &self,
-        si: &mut Interaction,
+        mut si: Interaction,
         ray: &Ray,
         tri: &Triangle,
         uvs: Option<[Vec2; 3]>,
         tangent: Option<Vec4>,
-    ) {
+    ) -> Interaction {
         let (dpdu, dpdv) = triangle_partials(tri, uvs, si.ng);
-        self.perturb(si, ray, dpdu, dpdv, tangent);
+        self.perturb(&mut si, ray, dpdu, dpdv, tangent);
+        si
     }
 
-    /// Perturbs the shading normal of `si`, a hit of a sphere of radius `radius`.
+    /// Perturbs the shading normal of `si`, a hit of a sphere of radius `radius` (by value,
+    /// as in [`Scene::perturb_triangle`]).
     #[cold]
     /// The partials are those of its texture coordinates, in its own frame (`frame`), taken
     /// at its outward normal.
     pub(super) fn perturb_sphere(
         &self,
-        si: &mut Interaction,
+        mut si: Interaction,
         ray: &Ray,
         radius: f32,
         frame: &super::SphereFrame,
-    ) {
+    ) -> Interaction {
         let outward = if frame.flip { -si.ng } else { si.ng };
         let (dpdu, dpdv) = sphere_partials(frame.local(outward), radius);
         let (dpdu, dpdv) = (frame.world(dpdu), frame.world(dpdv));
-        self.perturb(si, ray, dpdu, dpdv, None);
+        self.perturb(&mut si, ray, dpdu, dpdv, None);
+        si
     }
 
     fn perturb(

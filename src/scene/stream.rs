@@ -53,6 +53,7 @@ impl Scene {
     /// [`Scene::intersect_many`] with `K` rays in flight (`K` ≤ 1: one by one), for the
     /// tests and benchmarks, which compare the choices.
     #[doc(hidden)]
+    #[inline(always)]
     pub fn intersect_many_k<const K: usize>(&self, rays: &[Ray], out: &mut [Option<Interaction>]) {
         assert_eq!(rays.len(), out.len(), "one output per ray");
         if K <= 1 || self.is_flat() {

@@ -18,7 +18,9 @@
 //! `any_step!`); the interleaving changes only when its steps run, never what they
 //! compute.
 
-use super::{ChildRef, Node4, RayBoxes, Stack, WideBvh, EMPTY, LEAF, WIDEN};
+use super::{
+    child_key, child_of_key, sort4, ChildRef, Node4, RayBoxes, Stack, WideBvh, EMPTY, LEAF, WIDEN,
+};
 use crate::accel::prefetch;
 use crate::geometry::Ray;
 use std::mem::MaybeUninit;
