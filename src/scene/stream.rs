@@ -105,6 +105,24 @@ impl Scene {
     /// their traversals interleaved as [`Scene::intersect_many`]'s are. Panics if the slices'
     /// lengths differ.
     pub fn occluded_many(&self, rays: &[Ray], t_max: &[f32], out: &mut [bool]) {
+        #[cfg(target_arch = "x86_64")]
+        if crate::integrator::has_x86_64_v3() {
+            // SAFETY: the CPU has the features, checked just above.
+            return unsafe { self.occluded_many_v3(rays, t_max, out) };
+        }
+        self.occluded_many_portable(rays, t_max, out);
+    }
+
+    /// [`Scene::occluded_many`] compiled for x86-64-v3, as `intersect_many_v3` is (its
+    /// callers' features do not pass to it).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
+    unsafe fn occluded_many_v3(&self, rays: &[Ray], t_max: &[f32], out: &mut [bool]) {
+        self.occluded_many_portable(rays, t_max, out);
+    }
+
+    #[inline(always)]
+    fn occluded_many_portable(&self, rays: &[Ray], t_max: &[f32], out: &mut [bool]) {
         if self.streams() {
             self.occluded_many_k::<STREAM>(rays, t_max, out);
         } else {
