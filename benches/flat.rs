@@ -123,11 +123,12 @@ fn shadow_end(s: &Scene, ray: Ray, r: &mut Pcg32) -> (Ray, f32) {
 #[cfg(target_arch = "x86_64")]
 fn row(label: &str, desc: &SceneDesc, mut rays: impl FnMut(&Scene) -> Vec<(Ray, f32)>) {
     use mcrt::accel::flat::Kernel;
-    let bvh = Scene::build(desc.clone()).without_flat();
+    use mcrt::accel::SingleRays;
+    let bvh = Scene::build_with(desc.clone(), SingleRays::Bvh);
     let kernels: Vec<(Kernel, Scene)> = [Kernel::Avx, Kernel::Avx512]
         .into_iter()
         .filter(|k| k.available())
-        .map(|k| (k, Scene::build(desc.clone()).with_flat_kernel(k)))
+        .map(|k| (k, Scene::build_with(desc.clone(), SingleRays::Flat(k))))
         .collect();
     let rays = rays(&bvh);
     let time = |s: &Scene| {

@@ -1105,7 +1105,7 @@ fn brute_force_and_the_bvh_agree() {
     for (name, desc) in scenes {
         let brute = Scene::build(desc.clone());
         flat_seen += brute.is_flat() as u32;
-        let bvh = Scene::build(desc).without_flat();
+        let bvh = Scene::build_with(desc, mcrt::accel::SingleRays::Bvh);
         let b = bvh.bvh.bounds().unwrap();
         let (mut hits, mut blocked) = (0, 0);
         for i in 0..40_000 {

@@ -8,6 +8,7 @@
 //! of rays in flight.
 
 use glam::{Affine3A, Quat, Vec2, Vec3, Vec3A};
+use mcrt::accel::SingleRays;
 use mcrt::geometry::mesh::TriangleMesh;
 use mcrt::geometry::Ray;
 use mcrt::material::{Bsdf, Lambert, Material};
@@ -408,5 +409,7 @@ fn small_scenes_by_brute_force_and_through_the_bvh() {
     let r = rays(&s, &mut rng, N);
     let hits = check(&s, &r);
     mixed(hits, N);
-    assert_eq!(check(&s.without_flat(), &r), hits);
+    let bvh = Scene::build_with(mcrt::load_scene(&p).unwrap(), SingleRays::Bvh);
+    assert!(!bvh.is_flat());
+    assert_eq!(check(&bvh, &r), hits);
 }

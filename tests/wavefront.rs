@@ -51,8 +51,13 @@ fn hiding_emitters(text: &str, hide: bool) -> String {
 }
 
 fn cornell() -> Scene {
+    cornell_with(mcrt::accel::SingleRays::Auto)
+}
+
+/// The Cornell box with its single rays answered as `single_rays` says.
+fn cornell_with(single_rays: mcrt::accel::SingleRays) -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.toml");
-    Scene::build(mcrt::load_scene(&path).unwrap())
+    Scene::build_with(mcrt::load_scene(&path).unwrap(), single_rays)
 }
 
 fn settings(scene: &Scene, over: FileSettings) -> RenderSettings {
@@ -780,7 +785,7 @@ fn traced_through_the_scene_both_ways() {
     same_both_ways(scene, &s, "instances");
     // The Cornell box through its BVH rather than by brute force, at every path length.
     for depth in [1, 2, 5] {
-        let scene = cornell().without_flat();
+        let scene = cornell_with(mcrt::accel::SingleRays::Bvh);
         let mut s = settings(
             &scene,
             FileSettings {
@@ -863,7 +868,10 @@ vertices = [[2, 0.1, 0], [2, 0.1, 1], [2, 1, 0]]
             "[texture.checks]\ntype = \"checkerboard\"\ncolor0 = [0.1, 0.1, 0.1]\ncolor1 = [0.9, 0.9, 0.9]\n[material.board]\ntype = \"lambert\"\nalbedo = \"checks\"",
         )),
     );
-    through_scene("the BVH traces", &cornell().without_flat());
+    through_scene(
+        "the BVH traces",
+        &cornell_with(mcrt::accel::SingleRays::Bvh),
+    );
     let mesh = |normals: &str| {
         OPEN.to_string()
             + r#"

@@ -6,17 +6,23 @@ use super::{
     META_EMITTER, META_MATERIAL, SPHERE,
 };
 use crate::accel::bvh::{self, PrimRef};
-use crate::accel::{huge_pages, BuildTimes};
+use crate::accel::{huge_pages, BuildTimes, SingleRays};
 use crate::geometry::{Aabb, Sphere, Triangle};
 use crate::light::{AreaLight, LightShape, Lights, OtherLight};
 use glam::Vec3A;
 use rayon::prelude::*;
 
 impl Scene {
-    /// The scene the integrators trace, from its description. Panics on a description
-    /// beyond what it can represent; [`SceneDesc::check_limits`] tells those apart first,
-    /// with a message (the CLI checks before it builds).
-    pub fn build(mut desc: SceneDesc) -> Scene {
+    /// The scene the integrators trace, from its description, its single rays answered as
+    /// [`SingleRays::Auto`] chooses. Panics on a description beyond what it can represent;
+    /// [`SceneDesc::check_limits`] tells those apart first, with a message (the CLI checks
+    /// before it builds).
+    pub fn build(desc: SceneDesc) -> Scene {
+        Scene::build_with(desc, SingleRays::Auto)
+    }
+
+    /// [`Scene::build`] with its single rays answered as `single_rays` says.
+    pub fn build_with(mut desc: SceneDesc, single_rays: SingleRays) -> Scene {
         let mut times = BuildTimes::start();
         let instances = super::instance::build(&mut desc, &mut times);
         let masked = desc.materials.iter().any(|m| m.opacity.is_some());
@@ -275,7 +281,14 @@ impl Scene {
         let meta = permuted(meta, &order);
         times.mark("reorder");
         #[cfg(target_arch = "x86_64")]
-        let flat = flat(&tris, &positions).filter(|_| !masked);
+        let flat = match single_rays {
+            SingleRays::Auto => flat(&tris, &positions),
+            SingleRays::Bvh => None,
+            SingleRays::Flat(k) => flat_with(&tris, &positions, Some(k)),
+        }
+        .filter(|_| !masked);
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = single_rays;
         // `emitting` is sorted by primitive.
         let emitters = if emitting.is_empty() {
             Vec::new()
@@ -371,7 +384,7 @@ fn flat(tris: &[[u32; 3]], positions: &[glam::Vec3]) -> Option<Box<crate::accel:
 /// [`crate::accel::flat::FLAT_MAX_SLOTS`] triangles; None beyond it), or the one its size
 /// and the CPU choose.
 #[cfg(target_arch = "x86_64")]
-pub(super) fn flat_with(
+fn flat_with(
     tris: &[[u32; 3]],
     positions: &[glam::Vec3],
     kernel: Option<crate::accel::flat::Kernel>,

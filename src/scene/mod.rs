@@ -621,39 +621,13 @@ impl Scene {
         0
     }
 
-    /// Whether single rays are traced by brute force ([`crate::accel::flat`]).
-    #[doc(hidden)]
+    /// Whether single rays are traced by brute force ([`crate::accel::flat`]) rather than
+    /// through the BVH ([`crate::accel::SingleRays`], chosen when the scene is built).
     pub fn is_flat(&self) -> bool {
         #[cfg(target_arch = "x86_64")]
         return self.flat.is_some();
         #[cfg(not(target_arch = "x86_64"))]
         false
-    }
-
-    /// The scene with its single rays traced by brute force with `kernel` whatever its size;
-    /// unchanged where it has more than [`crate::accel::flat::FLAT_MAX_SLOTS`] triangles or
-    /// the CPU does not run `kernel`. For the tests and benchmarks.
-    #[doc(hidden)]
-    #[cfg(target_arch = "x86_64")]
-    pub fn with_flat_kernel(mut self, kernel: crate::accel::flat::Kernel) -> Scene {
-        if self.masked {
-            return self; // brute force does not test opacity
-        }
-        if let Some(f) = build::flat_with(&self.tris, &self.positions, Some(kernel)) {
-            self.flat = Some(f);
-        }
-        self
-    }
-
-    /// The scene with its single rays traced through the BVH even where it is small enough
-    /// for brute force: for the tests and benchmarks, which compare both.
-    #[doc(hidden)]
-    pub fn without_flat(mut self) -> Scene {
-        #[cfg(target_arch = "x86_64")]
-        {
-            self.flat = None;
-        }
-        self
     }
 
     /// The material at a hit: its textured parameters evaluated there, a blend resolved
