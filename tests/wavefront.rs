@@ -804,6 +804,58 @@ fn traced_through_the_scene_both_ways() {
     }
 }
 
+/// An opacity mask (Mitsuba's `mask` with a bitmap opacity of 1, 0.5 and 0) in front of the
+/// light, which the scene's queries see through for camera and shadow rays alike: the
+/// feature scene `maps-mask.xml` without its normal and bump maps, second light and
+/// environment, which the lanes do not take.
+#[test]
+fn masks_traced_through_the_scene_both_ways() {
+    if !cpu_runs_it() {
+        return;
+    }
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mitsuba/features");
+    let mut xml = std::fs::read_to_string(dir.join("maps-mask.xml")).unwrap();
+    let cut = |xml: &mut String, from: &str, to: &str| {
+        let a = xml
+            .find(from)
+            .expect("the feature scene holds the part to cut");
+        let b = a + xml[a..].find(to).unwrap() + to.len();
+        xml.replace_range(a..b, "");
+    };
+    let shape = "<shape type=\"rectangle\">\n        <transform name=\"to_world\">";
+    cut(
+        &mut xml,
+        &format!("{shape}<scale x=\"0.6\" y=\"0.6\"/><rotate y=\"1\" angle=\"30\"/>"),
+        "</shape>",
+    );
+    cut(&mut xml, "<shape type=\"sphere\">", "</shape>");
+    cut(
+        &mut xml,
+        &format!("{shape}<scale x=\"1.2\" y=\"0.8\"/>"),
+        "</shape>",
+    );
+    cut(&mut xml, "<emitter type=\"constant\">", "</emitter>");
+    let leaf = dir.join("maps-leaf.png");
+    let xml = xml.replace("\"maps-leaf.png\"", &format!("\"{}\"", leaf.display()));
+    let path = std::env::temp_dir().join(format!("mcrt-wavefront-mask-{}.xml", std::process::id()));
+    std::fs::write(&path, xml).unwrap();
+    let scene = Scene::build(mcrt::load_scene(&path).unwrap());
+    std::fs::remove_file(&path).unwrap();
+    assert!(scene.materials.iter().any(|m| m.opacity.is_some()));
+    let s = settings(
+        &scene,
+        FileSettings {
+            width: Some(48),
+            height: Some(24),
+            spp: Some(4),
+            ..Default::default()
+        },
+    );
+    let w = Wavefront::new(&scene, &s);
+    assert!(w.is_some_and(|w| !w.is_brute_force()), "the masked scene");
+    same_both_ways(scene, &s, "an opacity mask");
+}
+
 /// Scenes and settings the wavefront does not take render one path at a time.
 #[test]
 fn declines_what_it_does_not_do() {
