@@ -201,7 +201,7 @@ impl Sampler {
 }
 
 /// Unsigned 32-bit integer lanes, `u32` or a SIMD vector of them, for the Sobol points'
-/// scrambling written once ([`hash`], [`owen_scramble_rev`], [`reverse_bits`]) for one
+/// scrambling written once ([`hash`], [`owen_scramble_rev`], [`Uint::reverse_bits`]) for one
 /// camera sample here and sixteen in the wavefront's lanes
 /// (`integrator::wavefront::rng::Sobol16`). Every operation wraps, lane by lane.
 pub(crate) trait Uint:
@@ -273,16 +273,11 @@ pub(crate) fn owen_scramble_rev<U: Uint>(n: U, scramble: U) -> U {
 /// nibbles, bytes and halves swapped.
 #[inline(always)]
 pub(crate) fn reverse_bits_by_swaps<U: Uint>(n: U) -> U {
-    let swap = |n: U, k: u32, lo: u32| match k {
-        1 => (n.shr::<1>() & U::splat(lo)) | (n & U::splat(lo)).shl::<1>(),
-        2 => (n.shr::<2>() & U::splat(lo)) | (n & U::splat(lo)).shl::<2>(),
-        4 => (n.shr::<4>() & U::splat(lo)) | (n & U::splat(lo)).shl::<4>(),
-        _ => (n.shr::<8>() & U::splat(lo)) | (n & U::splat(lo)).shl::<8>(),
-    };
-    let n = swap(n, 1, 0x5555_5555);
-    let n = swap(n, 2, 0x3333_3333);
-    let n = swap(n, 4, 0x0f0f_0f0f);
-    let n = swap(n, 8, 0x00ff_00ff);
+    let m = |lo: u32| U::splat(lo);
+    let n = (n.shr::<1>() & m(0x5555_5555)) | (n & m(0x5555_5555)).shl::<1>();
+    let n = (n.shr::<2>() & m(0x3333_3333)) | (n & m(0x3333_3333)).shl::<2>();
+    let n = (n.shr::<4>() & m(0x0f0f_0f0f)) | (n & m(0x0f0f_0f0f)).shl::<4>();
+    let n = (n.shr::<8>() & m(0x00ff_00ff)) | (n & m(0x00ff_00ff)).shl::<8>();
     n.shr::<16>() | n.shl::<16>()
 }
 
@@ -498,6 +493,23 @@ impl Pcg32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The scrambling written once over `Uint` lanes gives the `sobol_burley` crate's bits
+    /// (Burley's reference code): its hash, its Owen scramble, its bit reversal (the swap
+    /// network the wide lanes use, against `u32::reverse_bits`) and its mapping to [0, 1).
+    #[test]
+    fn scrambling_matches_the_crate() {
+        use sobol_burley::parts;
+        let mut x = 3u64;
+        for _ in 0..100_000 {
+            x = mix64(x);
+            let (a, b) = (x as u32, (x >> 32) as u32);
+            assert_eq!(hash(a), parts::hash(a));
+            assert_eq!(owen_scramble_rev(a, b), parts::owen_scramble_rev(a, b));
+            assert_eq!(reverse_bits_by_swaps(a), a.reverse_bits());
+            assert_eq!(to_unit(a).to_bits(), parts::u32_to_f32_norm(a).to_bits());
+        }
+    }
 
     /// The table-driven Sobol dimensions and the precomputed hashes are the crate's own
     /// functions, for every sample index the sampler uses.

@@ -147,7 +147,7 @@ impl Wavefront<'_> {
             for st in groups.iter_mut().filter(|st| st.active != 0) {
                 self.front(st, stats);
             }
-            self.shadows(groups);
+            self.shadows(groups, &mut rays);
             for st in groups.iter_mut() {
                 self.back(st, pixels, sums, stats);
             }

@@ -314,9 +314,13 @@ impl Wavefront<'_> {
     /// The shadow rays `front` left in the groups, traced together: packed sixteen to a
     /// vector (where each group alone fills about half of one), each against every
     /// primitive (`Scene::occluded`'s answers), the answers unpacked into each group's
-    /// `blocked` lanes.
+    /// `blocked` lanes. (`rays`: room for [`Trace::Scene`]'s rays, kept from step to step.)
     #[inline]
-    pub(super) unsafe fn shadows<S: LaneSampler>(&self, groups: &mut [Lanes<S>]) {
+    pub(super) unsafe fn shadows<S: LaneSampler>(
+        &self,
+        groups: &mut [Lanes<S>],
+        rays: &mut Vec<crate::geometry::Ray>,
+    ) {
         use std::arch::x86_64::_pdep_u64;
         // The rays, packed: origin and direction by axis. Room for every group's sixteen.
         const ROOM: usize = 16 * GROUPS;
@@ -339,7 +343,7 @@ impl Wavefront<'_> {
         // Their answers, a bit a ray.
         let blocked = match self.trace {
             Trace::Lanes => self.occluded_lanes(&o, &d, n),
-            Trace::Scene => self.occluded_scene(&o, &d, n),
+            Trace::Scene => self.occluded_scene(&o, &d, n, rays),
         };
         let mut at = 0;
         for g in groups.iter_mut() {
@@ -399,16 +403,17 @@ impl Wavefront<'_> {
         o: &[[f32; ROOM]; 3],
         d: &[[f32; ROOM]; 3],
         n: usize,
+        rays: &mut Vec<crate::geometry::Ray>,
     ) -> u64 {
         let ray = |k: usize| {
             let v = |a: &[[f32; ROOM]; 3]| glam::Vec3A::new(a[0][k], a[1][k], a[2][k]);
             crate::geometry::Ray::new(v(o), v(d))
         };
-        let rays: [crate::geometry::Ray; ROOM] = std::array::from_fn(ray);
+        rays.clear();
+        rays.extend((0..n).map(ray));
         let t_max = [1.0 - SHADOW_EPSILON; ROOM];
         let mut out = [false; ROOM];
-        self.scene
-            .occluded_many(&rays[..n], &t_max[..n], &mut out[..n]);
+        self.scene.occluded_many(rays, &t_max[..n], &mut out[..n]);
         (0..n).fold(0, |b, k| b | (out[k] as u64) << k)
     }
 }
