@@ -111,6 +111,22 @@ pub(crate) fn sample_lights(
     }
 }
 
+/// [`sample_lights`] with one light sample (`n` = 1, the default), its shadow ray left to the
+/// caller: the ray, the distance it must be clear to, and the sample's contribution if it is
+/// (None where it contributes nothing whatever the ray finds). The numbers are
+/// [`one_sample`]'s.
+#[inline(always)]
+pub(crate) fn one_light(
+    scene: &Scene,
+    si: &Interaction,
+    frame: &Frame,
+    wo: Vec3A,
+    material: &Material,
+    sampler: &mut crate::sampler::Sampler,
+) -> Option<(Ray, f32, Color)> {
+    light_sample(scene, si, frame, wo, material, 1, sampler.next_3d())
+}
+
 /// One light sample (`n` = 1, the default): `any_lights` without its batch, its lattice and
 /// its packets, which cost a vertex about a fifth of its light sampling (callgrind, Cornell
 /// box). The sample is `any_lights`'s first, so the result is the same.

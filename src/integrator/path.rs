@@ -1,7 +1,7 @@
 //! Path tracing with next-event estimation, MIS and Russian roulette (Kajiya 1986; Veach 1997
 //! ch. 9; the structure follows pbrt-v4's `PathIntegrator` and Mitsuba 3's `path`).
 
-use super::{emitted, escaped, sample_lights, IntegratorParams, RayStats};
+use super::{emitted, escaped, one_light, sample_lights, IntegratorParams, RayStats};
 use crate::camera::Camera;
 use crate::film::PixelSums;
 use crate::geometry::{Frame, Ray};
@@ -76,9 +76,10 @@ impl super::Integrator for PathTracer<'_> {
     }
 }
 
-/// Radiance along a camera ray, one path at a time: the loop "intersect, step" over
-/// [`PathState::step`], which holds all of the path's maths (the stream, [`super::stream`],
-/// runs the same function for many paths at a time).
+/// Radiance along a camera ray, one path at a time: the loop "intersect, step, trace the
+/// step's shadow ray" over [`PathState::step`], which holds all of the path's maths (the
+/// stream, [`super::stream`], runs the same function for many paths at a time, and traces
+/// their shadow rays together).
 #[inline(always)]
 pub fn li(
     scene: &Scene,
@@ -92,10 +93,27 @@ pub fn li(
     };
     loop {
         let hit = scene.intersect(&path.ray);
-        if !path.step(scene, hit.as_ref(), sampler, p, stats) {
+        let (alive, shadow) = path.step(scene, hit.as_ref(), sampler, p, stats);
+        if let Some(s) = shadow {
+            path.light(&s, scene.occluded(&s.ray, s.t_max));
+        }
+        if !alive {
             return path.l;
         }
     }
+}
+
+/// The shadow ray of a vertex's light sample, left by [`PathState::step`] to its caller:
+/// the segment that must be unobstructed up to `t_max` for the sample to add `l`
+/// ([`PathState::light`]). Returned rather than traced so that the stream can trace the
+/// shadow rays of all its paths in one call (`Scene::occluded_many`), which overlaps their
+/// traversals' cache misses as `Scene::intersect_many` does the closest hits'.
+#[derive(Clone, Copy, Debug)]
+pub struct Shadow {
+    pub ray: Ray,
+    pub t_max: f32,
+    /// The throughput at the vertex times the sample's contribution.
+    l: Color,
 }
 
 /// A path between two segments: the ray to trace next and what the vertices so far left
@@ -139,7 +157,10 @@ impl PathState {
 
     /// One vertex: takes `hit`, the closest hit of `self.ray` (None if it left the scene),
     /// adds what it sees and its next-event estimate to `self.l`, and either sets `self.ray`
-    /// to the next segment and returns true, or ends the path and returns false.
+    /// to the next segment and returns true, or ends the path and returns false. With one
+    /// light sample a vertex, its shadow ray is returned instead of traced, and the caller
+    /// passes its answer to [`PathState::light`] before the next step (the path's value is
+    /// then complete even where this step ended it).
     #[inline(always)]
     pub fn step(
         &mut self,
@@ -148,7 +169,7 @@ impl PathState {
         sampler: &mut Sampler,
         p: &IntegratorParams,
         stats: &mut RayStats,
-    ) -> bool {
+    ) -> (bool, Option<Shadow>) {
         stats.rays += 1;
         let ray = self.ray;
         let hidden = self.depth == 0 && p.hide_emitters;
@@ -156,40 +177,43 @@ impl PathState {
             if !hidden {
                 self.l += self.beta * escaped(scene, ray.d, self.prev, p.shadow_rays);
             }
-            return false;
+            return (false, None);
         };
         if !hidden {
             self.l += self.beta * emitted(scene, si, ray.d, self.prev, p.shadow_rays);
         }
         // A further vertex would make the path longer than max_depth segments.
         if self.depth + 1 >= p.max_depth.unwrap_or(u32::MAX) {
-            return false;
+            return (false, None);
         }
         let material = &scene.material_at(si);
         if material.is_black() {
-            return false;
+            return (false, None);
         }
         let frame = Frame::from_normal(si.ns);
         let wo = frame.to_local(-ray.d);
+        // With one light sample, its shadow ray goes to the caller.
+        let mut shadow = None;
         if !material.is_specular() && !scene.lights.is_empty() {
-            self.l += self.beta
-                * sample_lights(
-                    scene,
-                    si,
-                    &frame,
-                    wo,
-                    material,
-                    p.shadow_rays,
-                    sampler,
-                    stats,
-                );
+            let n = p.shadow_rays;
+            if n == 1 {
+                shadow =
+                    one_light(scene, si, &frame, wo, material, sampler).map(|(ray, t_max, c)| {
+                        stats.shadow_rays += 1;
+                        let l = self.beta * c;
+                        Shadow { ray, t_max, l }
+                    });
+            } else {
+                let direct = sample_lights(scene, si, &frame, wo, material, n, sampler, stats);
+                self.l += self.beta * direct;
+            }
         }
         // One request for the direction (the best-stratified pair of a Sobol point), the
         // lobe choice and the roulette.
         let [ux, uy, u1, u_rr] = sampler.next_4d();
         let u2 = glam::Vec2::new(ux, uy);
         let Some(bs) = material.sample(wo, u1, u2, TransportMode::Radiance) else {
-            return false;
+            return (false, shadow);
         };
         self.beta *= bs.weight;
         self.eta2 *= bs.eta * bs.eta;
@@ -204,9 +228,17 @@ impl PathState {
         let (survives, beta) =
             p.rr.play(self.beta, self.eta2, |start| self.depth >= start, u_rr);
         if !survives {
-            return false;
+            return (false, shadow);
         }
         self.beta = beta;
-        self.beta != Color::ZERO
+        (self.beta != Color::ZERO, shadow)
+    }
+
+    /// Adds the light sample of `s` (from this path's last step) unless `occluded`.
+    #[inline(always)]
+    pub fn light(&mut self, s: &Shadow, occluded: bool) {
+        if !occluded {
+            self.l += s.l;
+        }
     }
 }

@@ -15,11 +15,12 @@
 //! traversal's dependent loads at a time: the argument of Laine, Karras and Aila, "Megakernels
 //! Considered Harmful: Wavefront Path Tracing on GPUs" (HPG 2013), for splitting the path
 //! loop into a trace stage and a shade stage over queues of paths, as pbrt-v4's wavefront
-//! integrator does (`src/pbrt/wavefront/`). Next-event estimation stays inside the step (its
-//! shadow rays of a vertex are traced as one packet, [`super::nee`]).
+//! integrator does (`src/pbrt/wavefront/`). With one light sample a vertex (the default), the
+//! step hands back its shadow ray, and a round's shadow rays are traced together too
+//! ([`Scene::occluded_many`]) before the paths that ended add their values; with several,
+//! they stay inside the step (traced as one packet a vertex, [`super::nee`]).
 
-use super::path::PathState;
-use super::{IntegratorParams, RayStats};
+use super::path::{PathState, Shadow};
 use crate::camera::Camera;
 use crate::film::PixelSums;
 use crate::geometry::Ray;
@@ -121,16 +122,26 @@ fn render_tile_portable(
     }
     let mut rays: Vec<Ray> = Vec::with_capacity(POOL);
     let mut hits: Vec<Option<Interaction>> = vec![None; POOL];
+    let mut shadows = Shadows::default();
+    let mut ended: Vec<bool> = vec![false; POOL];
     while !pool.is_empty() {
         rays.clear();
         rays.extend(pool.iter().map(|slot| slot.path.ray));
         let hits = &mut hits[..pool.len()];
         scene.intersect_many(&rays, hits);
-        let mut live = pool.len();
-        for (slot, hit) in pool.iter_mut().zip(hits) {
-            if step(scene, slot, hit.as_ref(), p, &mut stats.rays) {
-                continue;
+        shadows.clear();
+        for (j, ((slot, hit), ended)) in pool.iter_mut().zip(hits).zip(&mut ended).enumerate() {
+            let (alive, shadow) =
+                slot.path
+                    .step(scene, hit.as_ref(), &mut slot.sampler, p, &mut stats.rays);
+            *ended = !alive;
+            if let Some(s) = shadow {
+                shadows.push(j, s);
             }
+        }
+        shadows.trace(scene, &mut pool);
+        let mut live = pool.len();
+        for (slot, _) in pool.iter_mut().zip(&ended).filter(|(_, &ended)| ended) {
             render::add_sample(&mut sums[slot.k], &pixels[slot.k], slot.path.l, stats);
             match start(s, camera, &mut queue, sums, stats) {
                 Some(next) => *slot = next,
@@ -147,16 +158,39 @@ fn render_tile_portable(
     }
 }
 
-/// One vertex of a slot's path (kept out of line of the loop above only for reading).
-#[inline(always)]
-fn step(
-    scene: &Scene,
-    slot: &mut Slot,
-    hit: Option<&Interaction>,
-    p: &IntegratorParams,
-    stats: &mut RayStats,
-) -> bool {
-    slot.path.step(scene, hit, &mut slot.sampler, p, stats)
+/// The shadow rays of a round's steps, by slot, traced together.
+#[derive(Default)]
+struct Shadows {
+    slots: Vec<(usize, Shadow)>,
+    rays: Vec<Ray>,
+    t_max: Vec<f32>,
+    occluded: Vec<bool>,
+}
+
+impl Shadows {
+    fn clear(&mut self) {
+        self.slots.clear();
+        self.rays.clear();
+        self.t_max.clear();
+    }
+
+    #[inline(always)]
+    fn push(&mut self, slot: usize, s: Shadow) {
+        self.rays.push(s.ray);
+        self.t_max.push(s.t_max);
+        self.slots.push((slot, s));
+    }
+
+    /// Traces the rays ([`Scene::occluded_many`]) and gives each its slot's path.
+    #[inline(always)]
+    fn trace(&mut self, scene: &Scene, pool: &mut [Slot]) {
+        self.occluded.clear();
+        self.occluded.resize(self.rays.len(), false);
+        scene.occluded_many(&self.rays, &self.t_max, &mut self.occluded);
+        for ((j, s), &occluded) in self.slots.iter().zip(&self.occluded) {
+            pool[*j].path.light(s, occluded);
+        }
+    }
 }
 
 /// The queue's next camera sample as a path (camera samples of a path that traces no
