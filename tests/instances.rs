@@ -4,7 +4,7 @@
 //! shadow packets agree with single rays; a group's geometry is stored once.
 
 use glam::{Affine3A, Mat4, Quat, Vec2, Vec3, Vec3A};
-use mcrt::accel::{ShadowPacket, PACKET};
+use mcrt::accel::{RayPacket, PACKET};
 use mcrt::geometry::mesh::TriangleMesh;
 use mcrt::geometry::Ray;
 use mcrt::material::{Bsdf, Lambert, Material};
@@ -290,7 +290,7 @@ fn many_overlapping_instances_agree_with_the_flattened_scene() {
     let mut differ = 0;
     for chunk in rays.chunks(PACKET) {
         let o = chunk[0].o;
-        let mut pk = ShadowPacket {
+        let mut pk = RayPacket {
             o,
             d: [[0.0; PACKET]; 3],
             t_max: [0.0; PACKET],

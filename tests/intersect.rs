@@ -968,7 +968,7 @@ fn bvh_handles_negative_zero_direction_components() {
 /// among them, random `t_max` per lane, and random sets of active lanes.
 #[test]
 fn shadow_packets_match_single_rays() {
-    use mcrt::accel::{ShadowPacket, PACKET};
+    use mcrt::accel::{RayPacket, PACKET};
     let mut rng = Rng::new(8);
     let soup = Soup::new(&mut rng, 3000, 40);
     let (mut occluded, mut lanes) = (0, 0);
@@ -980,7 +980,7 @@ fn shadow_packets_match_single_rays() {
         };
         // A target region: small (coherent rays, as next-event estimation sends) or large.
         let (c, r) = (rng.ball() * 10.0, if i % 3 == 0 { 8.0 } else { 0.5 });
-        let mut pk = ShadowPacket {
+        let mut pk = RayPacket {
             o,
             d: [[0.0; PACKET]; 3],
             t_max: [0.0; PACKET],

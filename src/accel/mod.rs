@@ -8,7 +8,7 @@ pub mod timing;
 pub mod wide;
 pub use bvh::Bvh;
 pub use timing::BuildTimes;
-pub use wide::{ShadowPacket, WideBvh, PACKET};
+pub use wide::{RayPacket, WideBvh, PACKET};
 
 /// What answers a scene's single-ray queries (`Scene::intersect`, `Scene::occluded`), chosen
 /// when the scene is built (`Scene::build_with`). It is part of the scene, not a render

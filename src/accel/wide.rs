@@ -159,7 +159,7 @@ mod stream;
 use super::bvh::{Bvh, Nodes};
 use crate::geometry::{ray::gamma, Aabb, Ray};
 use glam::Vec4;
-pub use packet::{ShadowPacket, PACKET};
+pub use packet::{RayPacket, PACKET};
 
 /// A child reference: an inner node index, or a leaf (high bit set) packing the first
 /// primitive (27 bits) and the primitive count (4 bits).

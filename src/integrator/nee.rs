@@ -14,7 +14,7 @@
 //! instead of n. With n = 1 the only sample is Δ itself, as before.
 //!
 //! The shadow rays of a vertex share their origin and are traced as packets of up to sixteen
-//! ([`crate::accel::ShadowPacket`]). When the scene's only light is a triangle or a
+//! ([`crate::accel::RayPacket`]). When the scene's only light is a triangle or a
 //! parallelogram (`Lights::single_planar`, the case of most test scenes and of the TNCG15
 //! room), the batch's samples, BSDF values and MIS weights are computed eight or four lanes at
 //! a time ([`planar`]), with everything the samples share (the light's offset, the material's
@@ -26,7 +26,7 @@ mod planar;
 #[cfg(target_arch = "x86_64")]
 pub(super) use planar::{lambert_weight, shadow_dir, wrap};
 
-use crate::accel::{ShadowPacket, PACKET};
+use crate::accel::{RayPacket, PACKET};
 use crate::geometry::{Frame, Ray};
 use crate::material::sampling::power_heuristic;
 use crate::material::{Bsdf, Material};
@@ -225,7 +225,7 @@ fn any_lights(
         let pending = unsafe { &*(&pending[..k] as *const _ as *const [(Ray, f32, Color)]) };
         let o = pending.first().map(|p| p.0.o);
         if k > 1 && pending.iter().all(|p| Some(p.0.o) == o) {
-            let mut pk = ShadowPacket {
+            let mut pk = RayPacket {
                 o: o.unwrap_or_default(),
                 d: [[0.0; PACKET]; 3],
                 t_max: [0.0; PACKET],

@@ -15,18 +15,22 @@
 //! traversal's dependent loads at a time: the argument of Laine, Karras and Aila, "Megakernels
 //! Considered Harmful: Wavefront Path Tracing on GPUs" (HPG 2013), for splitting the path
 //! loop into a trace stage and a shade stage over queues of paths, as pbrt-v4's wavefront
-//! integrator does (`src/pbrt/wavefront/`). With one light sample a vertex (the default), the
-//! step hands back its shadow ray, and a round's shadow rays are traced together too
-//! ([`Scene::occluded_many`]) before the paths that ended add their values; with several,
-//! they stay inside the step (traced as one packet a vertex, [`super::nee`]).
+//! integrator does (`src/pbrt/wavefront/`). It also gathers the camera rays of consecutive
+//! samples, which share a pinhole camera's eye, into packets that traverse the tree once for
+//! up to sixteen rays (`Scene::intersect_packet`). With one light sample a vertex (the
+//! default), the step hands back its shadow ray, and a round's shadow rays are traced
+//! together too ([`Scene::occluded_many`]) before the paths that ended add their values;
+//! with several, they stay inside the step (traced as one packet a vertex, [`super::nee`]).
 
 use super::path::{PathState, Shadow};
+use crate::accel::{RayPacket, PACKET};
 use crate::camera::Camera;
 use crate::film::PixelSums;
 use crate::geometry::Ray;
 use crate::render::{self, RenderSettings, RenderStats, TilePixel};
 use crate::sampler::Sampler;
 use crate::scene::{Interaction, Scene};
+use glam::Vec3A;
 
 /// Paths in flight per tile (and rays per [`Scene::intersect_many`] call). With interleaved
 /// traversal, 256 and 512 rendered the gallery fastest (16 and 64 less so); with one ray
@@ -39,6 +43,8 @@ struct Slot {
     path: PathState,
     sampler: Sampler,
     k: usize,
+    /// Whether the path's ray is its camera ray (not yet traced).
+    fresh: bool,
 }
 
 /// The tile's camera samples, pixel by pixel, each pixel's in index order.
@@ -120,15 +126,13 @@ fn render_tile_portable(
             None => break,
         }
     }
-    let mut rays: Vec<Ray> = Vec::with_capacity(POOL);
+    let mut rays = Rays::default();
     let mut hits: Vec<Option<Interaction>> = vec![None; POOL];
     let mut shadows = Shadows::default();
     let mut ended: Vec<bool> = vec![false; POOL];
     while !pool.is_empty() {
-        rays.clear();
-        rays.extend(pool.iter().map(|slot| slot.path.ray));
         let hits = &mut hits[..pool.len()];
-        scene.intersect_many(&rays, hits);
+        rays.trace(scene, &mut pool, hits);
         shadows.clear();
         for (j, ((slot, hit), ended)) in pool.iter_mut().zip(hits).zip(&mut ended).enumerate() {
             let (alive, shadow) =
@@ -155,6 +159,101 @@ fn render_tile_portable(
         if live < pool.len() {
             pool.retain(|slot| slot.k != usize::MAX);
         }
+    }
+}
+
+/// The rays of a round's paths, traced together: the camera rays that share an origin (a
+/// pinhole camera's) in packets of up to sixteen, in slot order, so that each packet holds
+/// consecutive camera samples (a pixel's, then its neighbours'), which traverse nearly the
+/// same nodes ([`Scene::intersect_packet`]); the others in one call
+/// ([`Scene::intersect_many`]).
+#[derive(Default)]
+struct Rays {
+    /// The rays not in packets, and their slots.
+    rays: Vec<Ray>,
+    slots: Vec<usize>,
+    hits: Vec<Option<Interaction>>,
+}
+
+impl Rays {
+    /// The closest hit of each slot's ray, into `hits` by slot.
+    #[inline(always)]
+    fn trace(&mut self, scene: &Scene, pool: &mut [Slot], hits: &mut [Option<Interaction>]) {
+        self.rays.clear();
+        self.slots.clear();
+        let mut packet = Packet::default();
+        for (j, slot) in pool.iter_mut().enumerate() {
+            let ray = slot.path.ray;
+            if !std::mem::take(&mut slot.fresh) {
+                self.rays.push(ray);
+                self.slots.push(j);
+                continue;
+            }
+            if packet.n == PACKET || (packet.n > 0 && packet.pk.o != ray.o) {
+                packet.trace(scene, hits, self);
+            }
+            packet.push(j, ray);
+        }
+        packet.trace(scene, hits, self);
+        self.hits.clear();
+        self.hits.resize(self.rays.len(), None);
+        scene.intersect_many(&self.rays, &mut self.hits);
+        for (&j, hit) in self.slots.iter().zip(&self.hits) {
+            hits[j] = *hit;
+        }
+    }
+}
+
+/// Camera rays from one origin being gathered, and their slots.
+struct Packet {
+    pk: RayPacket,
+    slots: [usize; PACKET],
+    n: usize,
+}
+
+impl Default for Packet {
+    fn default() -> Packet {
+        Packet {
+            pk: RayPacket {
+                o: Vec3A::ZERO,
+                d: [[0.0; PACKET]; 3],
+                t_max: [f32::INFINITY; PACKET],
+            },
+            slots: [0; PACKET],
+            n: 0,
+        }
+    }
+}
+
+impl Packet {
+    #[inline(always)]
+    fn push(&mut self, slot: usize, ray: Ray) {
+        let (pk, n) = (&mut self.pk, self.n);
+        pk.o = ray.o;
+        (pk.d[0][n], pk.d[1][n], pk.d[2][n]) = (ray.d.x, ray.d.y, ray.d.z);
+        self.slots[n] = slot;
+        self.n += 1;
+    }
+
+    /// Traces the packet's rays into `hits` by slot and empties it; a single ray joins
+    /// `rest`'s, which its own traversal serves better.
+    #[inline(always)]
+    fn trace(&mut self, scene: &Scene, hits: &mut [Option<Interaction>], rest: &mut Rays) {
+        match self.n {
+            0 => {}
+            1 => {
+                rest.rays.push(self.pk.ray(0));
+                rest.slots.push(self.slots[0]);
+            }
+            n => {
+                let mut out = [None; PACKET];
+                scene.intersect_packet(&self.pk, (1 << n) - 1, &mut out);
+                for (&j, hit) in self.slots[..n].iter().zip(&out) {
+                    hits[j] = *hit;
+                }
+            }
+        }
+        self.n = 0;
     }
 }
 
@@ -207,7 +306,15 @@ fn start(
         let (k, i) = queue.next()?;
         let (sampler, ray) = render::camera_sample(s, camera, &queue.pixels[k], i);
         match PathState::new(ray, &s.params) {
-            Some(path) => return Some(Slot { path, sampler, k }),
+            Some(path) => {
+                let fresh = true;
+                return Some(Slot {
+                    path,
+                    sampler,
+                    k,
+                    fresh,
+                });
+            }
             None => render::add_sample(&mut sums[k], &queue.pixels[k], crate::Color::ZERO, stats),
         }
     }

@@ -19,7 +19,7 @@
 use super::desc::{check_counts, shape_counts, GroupDesc};
 use super::{Interaction, Scene, SceneDesc};
 use crate::accel::bvh::{self, PrimRef};
-use crate::accel::{BuildTimes, ShadowPacket, WideBvh};
+use crate::accel::{BuildTimes, RayPacket, WideBvh};
 use crate::geometry::ray::gamma;
 use crate::geometry::{Aabb, Ray};
 use glam::{Affine3A, Mat3A, Vec3A};
@@ -187,7 +187,7 @@ impl Placed {
     }
 
     /// The shadow packet in object space (the shared origin stays shared).
-    fn packet_in_object_space(&self, pk: &ShadowPacket) -> ShadowPacket {
+    fn packet_in_object_space(&self, pk: &RayPacket) -> RayPacket {
         let m = self.to_object.matrix3;
         let mut out = *pk;
         out.o = self.to_object.transform_point3a(pk.o);
@@ -288,7 +288,7 @@ impl Instances {
 
     /// The lanes of `active` that an instance blocks.
     #[inline(never)]
-    pub(super) fn occluded_packet(&self, pk: &ShadowPacket, active: u32) -> u32 {
+    pub(super) fn occluded_packet(&self, pk: &RayPacket, active: u32) -> u32 {
         self.tlas.occluded_packet(pk, active, |k, lanes| {
             let inst = &self.placed[k];
             let group = &self.groups[inst.group as usize].scene;
@@ -297,7 +297,7 @@ impl Instances {
     }
 
     /// [`Instances::occluded_packet`] by the AVX traversal (None without AVX).
-    pub(super) fn occluded_packet_avx(&self, pk: &ShadowPacket, active: u32) -> Option<u32> {
+    pub(super) fn occluded_packet_avx(&self, pk: &RayPacket, active: u32) -> Option<u32> {
         let mut ok = true;
         let hits = self.tlas.occluded_packet_avx(pk, active, |k, lanes| {
             let inst = &self.placed[k];

@@ -80,7 +80,7 @@ pub fn hash_unit(ray: &Ray, prim: usize) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::{ShadowPacket, PACKET};
+    use crate::accel::{RayPacket, PACKET};
     use glam::Vec3A;
 
     /// A masked quad ([−1, 1]², z = 0) of opacity `opacity` (XML) in front of a larger
@@ -124,7 +124,7 @@ mod tests {
         }
         // The packets share an origin: all the rays above do.
         for chunk in all.chunks(PACKET) {
-            let mut pk = ShadowPacket {
+            let mut pk = RayPacket {
                 o: chunk[0].o,
                 d: [[0.0; PACKET]; 3],
                 t_max: [0.0; PACKET],

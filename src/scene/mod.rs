@@ -12,6 +12,7 @@ pub mod gltf;
 pub mod instance;
 pub mod mask;
 pub mod obj;
+mod packet;
 mod perturb;
 pub mod ply;
 pub mod serialized;
@@ -23,7 +24,7 @@ pub mod xml;
 pub use desc::{GeometryDesc, GroupDesc, InstanceDesc, SceneDesc, ShapeDesc};
 pub use error::SceneError;
 
-use crate::accel::{ShadowPacket, WideBvh, PACKET};
+use crate::accel::{RayPacket, WideBvh, PACKET};
 use crate::camera::CameraDesc;
 use crate::geometry::ray::{offset_ray_origin, SHADOW_EPSILON};
 use crate::geometry::{Ray, Sphere, Triangle};
@@ -501,7 +502,7 @@ impl Scene {
     /// The lanes of `active` whose rays are blocked before their `t_max`: the answers of
     /// [`Scene::occluded`] for each, in one traversal.
     #[inline]
-    pub fn occluded_packet(&self, pk: &ShadowPacket, active: u32) -> u32 {
+    pub fn occluded_packet(&self, pk: &RayPacket, active: u32) -> u32 {
         let hits = self
             .bvh
             .occluded_packet(pk, active, |i, lanes| self.packet_hits(pk, i, lanes));
@@ -514,7 +515,7 @@ impl Scene {
     /// [`Scene::occluded_packet`] without AVX-512, where the CPU has AVX (`None` where it
     /// has not), for the tests to compare both packet traversals with single rays.
     #[doc(hidden)]
-    pub fn occluded_packet_avx(&self, pk: &ShadowPacket, active: u32) -> Option<u32> {
+    pub fn occluded_packet_avx(&self, pk: &RayPacket, active: u32) -> Option<u32> {
         let hits = self
             .bvh
             .occluded_packet_avx(pk, active, |i, lanes| self.packet_hits(pk, i, lanes))?;
@@ -528,7 +529,7 @@ impl Scene {
 
     /// The lanes of `lanes` whose rays primitive `i` blocks.
     #[inline(always)]
-    fn packet_hits(&self, pk: &ShadowPacket, i: usize, lanes: u32) -> u32 {
+    fn packet_hits(&self, pk: &RayPacket, i: usize, lanes: u32) -> u32 {
         let each = |mut m: u32, hit: &dyn Fn(usize) -> bool| {
             let mut hits = 0;
             while m != 0 {

@@ -1,29 +1,34 @@
-//! Occlusion of up to sixteen shadow rays from one origin in one traversal of the 4-wide BVH.
+//! Up to sixteen rays from one origin in one traversal of the 4-wide BVH: occlusion of a
+//! vertex's shadow rays ([`WideBvh::occluded_packet`]) and the closest hits of a pinhole
+//! camera's rays ([`WideBvh::closest_packet`]).
 //!
 //! Next-event estimation sends its shadow rays from one shading point to nearby points on
-//! the lights, so the rays of one vertex visit nearly the same nodes. Traced together, each
-//! node is fetched and its loop, stack and branches paid once for all of them, and each
-//! child box is tested against eight rays per 8-lane AVX instruction, or all sixteen per
-//! AVX-512 instruction where the CPU has it (rays in lanes, in the
-//! manner of Wald, Slusallek, Benthin and Wagner, "Interactive Rendering with Coherent Ray
-//! Tracing", Eurographics 2001, with a mask of active rays). A ray found occluded leaves the
-//! mask; a subtree is entered only for the rays that enter its box. Before the exact tests a
-//! node's four children are culled against the packet's interval of directions (interval
-//! arithmetic culling, as in Boulos et al., "Packet-based Whitted and Distribution Ray
-//! Tracing", Graphics Interface 2007), see `avx::Coherent`.
+//! the lights, and a pixel's camera samples leave the eye in nearly one direction, so such
+//! rays visit nearly the same nodes. Traced together, each node is fetched and its loop,
+//! stack and branches paid once for all of them, and each child box is tested against eight
+//! rays per 8-lane AVX instruction, or all sixteen per AVX-512 instruction where the CPU has
+//! it (rays in lanes, in the manner of Wald, Slusallek, Benthin and Wagner, "Interactive
+//! Rendering with Coherent Ray Tracing", Eurographics 2001, with a mask of active rays). A
+//! ray found occluded leaves the mask; a subtree is entered only for the rays that enter its
+//! box. Before the exact tests a node's four children are culled against the packet's
+//! interval of directions (interval arithmetic culling, as in Boulos et al., "Packet-based
+//! Whitted and Distribution Ray Tracing", Graphics Interface 2007), see `avx::Coherent`. The
+//! two traversals differ in what they seek ([`avx::Walk`]) and share the rest.
 //!
-//! The answers are exactly those of [`WideBvh::occluded`] for each ray on its own: every
-//! box test computes the same IEEE operations on the same operands, in the same order
-//! (`(slab − o) · (1/d)`, the near slab chosen by the sign of `1/d`, the same max/min
-//! operand order), so a ray enters exactly the boxes it enters alone, and tests the same
-//! primitives with the caller's own test. Whether a ray is occluded is a property of the
-//! set of primitives it reaches, not of the order they are visited in. Without AVX (checked
-//! at run time; the binary is built for plain x86-64) each ray is traced on its own; with
-//! AVX-512 (also checked at run time) the box tests take all sixteen lanes in one register,
-//! with the same operations lane by lane, so the answers do not depend on the CPU either.
+//! The answers are exactly those of [`WideBvh::occluded`] and [`WideBvh::intersect`] for
+//! each ray on its own: every box test computes the same IEEE operations on the same
+//! operands, in the same order (`(slab − o) · (1/d)`, the near slab chosen by the sign of
+//! `1/d`, the same max/min operand order), so a ray enters exactly the boxes it would enter
+//! alone with the same `t_max`, and tests the primitives there with the caller's own test.
+//! Whether a ray is occluded is a property of the set of primitives it reaches, and its
+//! closest hit (of equally near ones, the lowest primitive's) one of the primitives it
+//! reaches before it, not of the order they are visited in. Without AVX (checked at run
+//! time; the binary is built for plain x86-64) each ray is traced on its own; with AVX-512
+//! (also checked at run time) the box tests take all sixteen lanes in one register, with the
+//! same operations lane by lane, so the answers do not depend on the CPU either.
 
-use super::{WideBvh, EMPTY, LEAF, STACK};
-use crate::geometry::{ray::gamma, Ray};
+use super::{Node4, WideBvh, EMPTY, LEAF, STACK, WIDEN};
+use crate::geometry::Ray;
 use glam::Vec3A;
 
 /// Rays in a packet.
@@ -33,10 +38,10 @@ pub const PACKET: usize = 16;
 #[cfg(target_arch = "x86_64")]
 const HALVES: usize = PACKET / 8;
 
-/// Up to sixteen shadow rays that share their origin (sixteen: the ten of the TNCG15
-/// report's Figure 3.3 in one traversal).
+/// Up to sixteen rays that share their origin: a vertex's shadow rays (sixteen: the ten of
+/// the TNCG15 report's Figure 3.3 in one traversal), or a pinhole camera's rays.
 #[derive(Clone, Copy, Debug)]
-pub struct ShadowPacket {
+pub struct RayPacket {
     pub o: Vec3A,
     /// The directions, by axis then lane.
     pub d: [[f32; PACKET]; 3],
@@ -44,7 +49,7 @@ pub struct ShadowPacket {
     pub t_max: [f32; PACKET],
 }
 
-impl ShadowPacket {
+impl RayPacket {
     /// Lane `lane` as a ray, bit for bit the one that was stored.
     #[inline(always)]
     pub fn ray(&self, lane: usize) -> Ray {
@@ -62,7 +67,7 @@ impl WideBvh {
     #[inline]
     pub fn occluded_packet<F: FnMut(usize, u32) -> u32>(
         &self,
-        pk: &ShadowPacket,
+        pk: &RayPacket,
         active: u32,
         mut hit: F,
     ) -> u32 {
@@ -74,7 +79,7 @@ impl WideBvh {
         if std::arch::is_x86_feature_detected!("avx") {
             let wide = std::arch::is_x86_feature_detected!("avx512f");
             // SAFETY: the CPU has AVX, and AVX-512 where `wide`, checked just above.
-            return unsafe { avx::occluded(self, pk, active, wide, &mut hit) };
+            return unsafe { avx::run(self, pk, active, wide, &mut avx::Occlusion(&mut hit)) };
         }
         self.occluded_each(pk, active, hit)
     }
@@ -84,7 +89,7 @@ impl WideBvh {
     #[doc(hidden)]
     pub fn occluded_packet_avx<F: FnMut(usize, u32) -> u32>(
         &self,
-        pk: &ShadowPacket,
+        pk: &RayPacket,
         active: u32,
         mut hit: F,
     ) -> Option<u32> {
@@ -94,7 +99,9 @@ impl WideBvh {
                 return Some(0);
             }
             // SAFETY: the CPU has AVX, checked just above.
-            return Some(unsafe { avx::occluded(self, pk, active, false, &mut hit) });
+            return Some(unsafe {
+                avx::run(self, pk, active, false, &mut avx::Occlusion(&mut hit))
+            });
         }
         let _ = (pk, active, &mut hit);
         None
@@ -104,7 +111,7 @@ impl WideBvh {
     /// what the tests compare the packet traversal with.
     pub fn occluded_each<F: FnMut(usize, u32) -> u32>(
         &self,
-        pk: &ShadowPacket,
+        pk: &RayPacket,
         active: u32,
         mut hit: F,
     ) -> u32 {
@@ -119,6 +126,74 @@ impl WideBvh {
         }
         occ
     }
+
+    /// The closest hits of the lanes of `active`: `hit(prim, lanes, t_max)` tests primitive
+    /// `prim` against the rays of `lanes`, lowers `t_max` (by lane, from the packet's) of
+    /// those whose nearest hit it becomes, and returns them, each lane's answer that of its
+    /// ray on its own; returns the lanes that found one. The lanes' hits are those of
+    /// [`WideBvh::intersect`] for each ray on its own (see `avx::Closest`).
+    #[inline]
+    pub fn closest_packet<F: FnMut(usize, u32, &mut [f32; PACKET]) -> u32>(
+        &self,
+        pk: &RayPacket,
+        active: u32,
+        hit: F,
+    ) -> u32 {
+        self.closest_packet_with(pk, active, PACKET, hit)
+    }
+
+    /// [`Self::closest_packet`] with its box tests `lanes` rays at a time: sixteen where
+    /// `lanes` is 16 and the CPU has AVX-512, else eight where `lanes` is at least 8 and the
+    /// CPU has AVX, else each ray on its own (the same answers each way, which the tests
+    /// check).
+    #[inline]
+    pub(crate) fn closest_packet_with<F: FnMut(usize, u32, &mut [f32; PACKET]) -> u32>(
+        &self,
+        pk: &RayPacket,
+        active: u32,
+        lanes: usize,
+        mut hit: F,
+    ) -> u32 {
+        debug_assert!(active < 1 << PACKET);
+        if self.root == EMPTY || active == 0 {
+            return 0;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if lanes >= 8 && std::arch::is_x86_feature_detected!("avx") {
+            let wide = lanes >= PACKET && std::arch::is_x86_feature_detected!("avx512f");
+            let mut walk = avx::Closest {
+                hit: &mut hit,
+                t_max: pk.t_max,
+            };
+            // SAFETY: the CPU has AVX, and AVX-512 where `wide`, checked just above.
+            return unsafe { avx::run(self, pk, active, wide, &mut walk) };
+        }
+        self.closest_each(pk, active, hit)
+    }
+
+    /// The same answers, each ray by the single-ray traversal: the fallback without AVX.
+    fn closest_each<F: FnMut(usize, u32, &mut [f32; PACKET]) -> u32>(
+        &self,
+        pk: &RayPacket,
+        active: u32,
+        mut hit: F,
+    ) -> u32 {
+        let mut t_max = pk.t_max;
+        let mut found = 0;
+        let mut m = active;
+        while m != 0 {
+            let lane = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let ray = pk.ray(lane);
+            if self.intersect(&ray, t_max[lane], |p, t| {
+                t_max[lane] = t;
+                (hit(p, 1 << lane, &mut t_max) != 0).then_some(t_max[lane])
+            }) {
+                found |= 1 << lane;
+            }
+        }
+        found
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -128,7 +203,7 @@ mod avx {
     use std::mem::MaybeUninit;
 
     /// What every box test of a packet needs, in registers.
-    struct Lanes {
+    pub(super) struct Lanes {
         /// 1/d as `Vec3A::recip` computes it (a division, not an approximation).
         inv: [[__m256; HALVES]; 3],
         t_max: [__m256; HALVES],
@@ -136,21 +211,62 @@ mod avx {
         o: [__m128; 3],
     }
 
-    /// The packet traversal; see the module's comment for why its answers are the
-    /// single-ray traversal's.
+    /// The sixteen lanes' reciprocal directions and `t_max` in AVX-512 registers.
+    pub(super) struct Lanes16 {
+        inv: [__m512; 3],
+        t_max: __m512,
+    }
+
+    impl Lanes {
+        /// Each lane's `t_max` from `t` (after a closest-hit search lowered some), in both
+        /// widths.
+        #[inline(always)]
+        unsafe fn set_t_max<const WIDE: bool>(
+            &mut self,
+            l16: Option<&mut Lanes16>,
+            t: &[f32; PACKET],
+        ) {
+            for h in 0..HALVES {
+                self.t_max[h] = _mm256_loadu_ps(t[8 * h..].as_ptr());
+            }
+            if WIDE {
+                l16.unwrap_unchecked().t_max = _mm512_loadu_ps(t.as_ptr());
+            }
+        }
+    }
+
+    /// A traversal of a packet through the tree (which answer it seeks, and what it does at
+    /// nodes and leaves), run by [`run`] for the packet's kind and width.
+    pub(super) trait Walk {
+        /// Walks the tree for the lanes of `active`, of kind `KIND` (see [`Coherent`]), eight
+        /// lanes at a time or, with `WIDE` (and `l16`), sixteen; returns a mask of lanes
+        /// (the walk's answer). Inlined into [`run8`] and [`run16`], whose target features
+        /// its intrinsics are compiled with.
+        unsafe fn walk<const KIND: u8, const WIDE: bool>(
+            &mut self,
+            bvh: &WideBvh,
+            l: &mut Lanes,
+            l16: Option<&mut Lanes16>,
+            coh: &Coherent,
+            active: u32,
+        ) -> u32;
+    }
+
+    /// Runs `w` for the lanes of `active` of `pk`, sixteen lanes at a time where `wide`
+    /// (the CPU has AVX-512), else eight.
     #[target_feature(enable = "avx")]
-    pub(super) unsafe fn occluded<F: FnMut(usize, u32) -> u32>(
+    pub(super) unsafe fn run<W: Walk>(
         bvh: &WideBvh,
-        pk: &ShadowPacket,
+        pk: &RayPacket,
         active: u32,
         wide: bool,
-        hit: &mut F,
+        w: &mut W,
     ) -> u32 {
         let load = |a: &[f32; PACKET]| -> [__m256; HALVES] {
             std::array::from_fn(|h| _mm256_loadu_ps(a[8 * h..].as_ptr()))
         };
         let one = _mm256_set1_ps(1.0);
-        let lanes = Lanes {
+        let mut lanes = Lanes {
             inv: pk.d.map(|d| load(&d).map(|v| _mm256_div_ps(one, v))),
             t_max: load(&pk.t_max),
             o: [pk.o.x, pk.o.y, pk.o.z].map(|x| _mm_set1_ps(x)),
@@ -162,53 +278,277 @@ mod avx {
             None => ANY,
         };
         let c = c.unwrap_or_else(Coherent::none);
+        let l = &mut lanes;
         match (kind, wide) {
-            (COHERENT, false) => traverse::<COHERENT, F>(bvh, &lanes, &c, active, hit),
-            (FINITE, false) => traverse::<FINITE, F>(bvh, &lanes, &c, active, hit),
-            (_, false) => traverse::<ANY, F>(bvh, &lanes, &c, active, hit),
-            (COHERENT, true) => traverse16::<COHERENT, F>(bvh, &lanes, pk, &c, active, hit),
-            (FINITE, true) => traverse16::<FINITE, F>(bvh, &lanes, pk, &c, active, hit),
-            (_, true) => traverse16::<ANY, F>(bvh, &lanes, pk, &c, active, hit),
+            (COHERENT, false) => run8::<COHERENT, W>(bvh, l, &c, active, w),
+            (FINITE, false) => run8::<FINITE, W>(bvh, l, &c, active, w),
+            (_, false) => run8::<ANY, W>(bvh, l, &c, active, w),
+            (COHERENT, true) => run16::<COHERENT, W>(bvh, l, pk, &c, active, w),
+            (FINITE, true) => run16::<FINITE, W>(bvh, l, pk, &c, active, w),
+            (_, true) => run16::<ANY, W>(bvh, l, pk, &c, active, w),
         }
     }
 
-    /// The traversal with AVX: each child box against the rays eight at a time.
+    /// [`run`] with AVX: each child box against the rays eight at a time.
     #[target_feature(enable = "avx")]
-    unsafe fn traverse<const KIND: u8, F: FnMut(usize, u32) -> u32>(
+    unsafe fn run8<const KIND: u8, W: Walk>(
         bvh: &WideBvh,
-        l: &Lanes,
+        l: &mut Lanes,
         coh: &Coherent,
         active: u32,
-        hit: &mut F,
+        w: &mut W,
     ) -> u32 {
-        traverse_with::<KIND, false, F>(bvh, l, None, coh, active, hit)
+        w.walk::<KIND, false>(bvh, l, None, coh, active)
     }
 
-    /// The traversal with AVX-512: each child box against all sixteen rays at once.
+    /// [`run`] with AVX-512: each child box against all sixteen rays at once.
     #[target_feature(enable = "avx,avx512f")]
-    unsafe fn traverse16<const KIND: u8, F: FnMut(usize, u32) -> u32>(
+    unsafe fn run16<const KIND: u8, W: Walk>(
         bvh: &WideBvh,
-        l: &Lanes,
-        pk: &ShadowPacket,
+        l: &mut Lanes,
+        pk: &RayPacket,
         coh: &Coherent,
         active: u32,
-        hit: &mut F,
+        w: &mut W,
     ) -> u32 {
         let one = _mm512_set1_ps(1.0);
-        let l16 = Lanes16 {
+        let mut l16 = Lanes16 {
             // The same division as the eight-lane `inv`, lane for lane.
             inv: pk
                 .d
                 .map(|d| _mm512_div_ps(one, _mm512_loadu_ps(d.as_ptr()))),
             t_max: _mm512_loadu_ps(pk.t_max.as_ptr()),
         };
-        traverse_with::<KIND, true, F>(bvh, l, Some(&l16), coh, active, hit)
+        w.walk::<KIND, true>(bvh, l, Some(&mut l16), coh, active)
     }
 
-    /// The sixteen lanes' reciprocal directions and `t_max` in AVX-512 registers.
-    struct Lanes16 {
-        inv: [__m512; 3],
-        t_max: __m512,
+    /// The occlusion traversal: `hit(prim, lanes)` tests a primitive against the rays of
+    /// `lanes` and returns those it blocks; the walk returns the lanes blocked.
+    pub(super) struct Occlusion<F>(pub F);
+
+    impl<F: FnMut(usize, u32) -> u32> Walk for Occlusion<F> {
+        #[inline(always)]
+        unsafe fn walk<const KIND: u8, const WIDE: bool>(
+            &mut self,
+            bvh: &WideBvh,
+            l: &mut Lanes,
+            l16: Option<&mut Lanes16>,
+            coh: &Coherent,
+            active: u32,
+        ) -> u32 {
+            let l16 = l16.map(|l16| &*l16);
+            // (node, lanes that entered it); left uninitialised, entries are written before
+            // read.
+            let mut stack = [const { MaybeUninit::<(u32, u32)>::uninit() }; STACK];
+            let mut len = 0;
+            let (mut cur, mut mask) = (bvh.root, active);
+            let mut occ = 0u32;
+            loop {
+                if cur & LEAF != 0 {
+                    let first = ((cur & !LEAF) >> 4) as usize;
+                    for p in first..first + (cur & 15) as usize {
+                        occ |= (self.0)(p, mask);
+                        mask &= !occ;
+                        if mask == 0 {
+                            break;
+                        }
+                    }
+                    if occ == active {
+                        return occ;
+                    }
+                } else {
+                    let node = bvh.node(cur);
+                    let (rel, mut cand, all) = relative::<KIND>(node, l, coh);
+                    let mut next = EMPTY;
+                    let mut next_mask = 0;
+                    while cand != 0 {
+                        let c = cand.trailing_zeros() as usize;
+                        cand &= cand - 1;
+                        let child = node.child[c];
+                        if child == EMPTY {
+                            continue;
+                        }
+                        let m = if all & (1 << c) != 0 {
+                            // Entered by every active lane: no lane's own test can fail.
+                            mask
+                        } else {
+                            enter::<KIND, WIDE, false>(l, l16, &rel, c, mask).0
+                        };
+                        if m == 0 {
+                            continue;
+                        }
+                        if next == EMPTY {
+                            (next, next_mask) = (child, m);
+                        } else {
+                            debug_assert!(len < STACK);
+                            stack.get_unchecked_mut(len).write((child, m));
+                            len += 1;
+                        }
+                    }
+                    if next != EMPTY {
+                        (cur, mask) = (next, next_mask);
+                        continue;
+                    }
+                }
+                // The next entry with a lane not yet known to be occluded.
+                loop {
+                    if len == 0 {
+                        return occ;
+                    }
+                    len -= 1;
+                    let (c, m) = stack.get_unchecked(len).assume_init();
+                    if m & !occ != 0 {
+                        (cur, mask) = (c, m & !occ);
+                        break;
+                    }
+                }
+            }
+        }
+    }
+
+    /// The closest-hit traversal: `hit(prim, lanes, t_max)` tests a primitive against the
+    /// rays of `lanes`, lowers the `t_max` of those whose nearest hit it becomes, and returns
+    /// them; the walk returns the lanes with a hit. `t_max` starts as the packet's.
+    ///
+    /// A node's children are visited nearest first, by the smallest entry distance of the
+    /// lanes that enter each; a postponed child is resumed by the lanes whose `t_max` is not
+    /// below that distance (widened as the box test widens it), the others having found a
+    /// nearer hit. Each lane enters only boxes it enters on its own with its current `t_max`
+    /// (its own test, see the module's comment), and tests only primitives there; its nearest
+    /// hit, of equally near ones the lowest primitive's (`Scene::keep_nearer`), does not
+    /// depend on the order of the visits, so it is the single ray's.
+    pub(super) struct Closest<F> {
+        pub hit: F,
+        pub t_max: [f32; PACKET],
+    }
+
+    impl<F: FnMut(usize, u32, &mut [f32; PACKET]) -> u32> Walk for Closest<F> {
+        #[inline(always)]
+        unsafe fn walk<const KIND: u8, const WIDE: bool>(
+            &mut self,
+            bvh: &WideBvh,
+            l: &mut Lanes,
+            mut l16: Option<&mut Lanes16>,
+            coh: &Coherent,
+            active: u32,
+        ) -> u32 {
+            // (node, lanes that entered it, their smallest entry distance); left
+            // uninitialised, entries are written before read.
+            let mut stack = [const { MaybeUninit::<(u32, u32, f32)>::uninit() }; STACK];
+            let mut len = 0;
+            let (mut cur, mut mask) = (bvh.root, active);
+            let mut found = 0u32;
+            loop {
+                if cur & LEAF != 0 {
+                    let first = ((cur & !LEAF) >> 4) as usize;
+                    let mut nearer = 0;
+                    for p in first..first + (cur & 15) as usize {
+                        nearer |= (self.hit)(p, mask, &mut self.t_max);
+                    }
+                    if nearer != 0 {
+                        found |= nearer;
+                        l.set_t_max::<WIDE>(l16.as_deref_mut(), &self.t_max);
+                    }
+                } else {
+                    let node = bvh.node(cur);
+                    // (Every child is tested lane by lane: the entry distances order them.)
+                    let (rel, mut cand, _) = relative::<KIND>(node, l, coh);
+                    let mut entered = [(0u32, 0u32, 0f32); 4];
+                    let mut n = 0;
+                    while cand != 0 {
+                        let c = cand.trailing_zeros() as usize;
+                        cand &= cand - 1;
+                        let child = node.child[c];
+                        if child == EMPTY {
+                            continue;
+                        }
+                        let (m, near) = enter::<KIND, WIDE, true>(l, l16.as_deref(), &rel, c, mask);
+                        if m == 0 {
+                            continue;
+                        }
+                        // Insertion by entry distance, nearest first.
+                        let mut k = n;
+                        while k > 0 && entered[k - 1].2 > near {
+                            entered[k] = entered[k - 1];
+                            k -= 1;
+                        }
+                        entered[k] = (child, m, near);
+                        n += 1;
+                    }
+                    if n > 0 {
+                        for &e in entered[1..n].iter().rev() {
+                            debug_assert!(len < STACK);
+                            stack.get_unchecked_mut(len).write(e);
+                            len += 1;
+                        }
+                        (cur, mask) = (entered[0].0, entered[0].1);
+                        continue;
+                    }
+                }
+                // The next postponed child that a lane still enters before its nearest hit.
+                loop {
+                    if len == 0 {
+                        return found;
+                    }
+                    len -= 1;
+                    let (c, m, near) = stack.get_unchecked(len).assume_init();
+                    let mut lanes = m;
+                    let mut resume = 0;
+                    while lanes != 0 {
+                        let lane = lanes.trailing_zeros() as usize;
+                        lanes &= lanes - 1;
+                        if near <= self.t_max[lane] * WIDEN {
+                            resume |= 1 << lane;
+                        }
+                    }
+                    if resume != 0 {
+                        (cur, mask) = (c, resume);
+                        break;
+                    }
+                }
+            }
+        }
+    }
+
+    /// A node's slabs relative to the packet's origin, all four children at once: the
+    /// single-ray test's `slab − o`, which the origin shared by all lanes lets us share too;
+    /// and the children that some lane may enter, and that every active lane enters. A
+    /// coherent packet needs only each axis's near and far slab (the same for all its lanes)
+    /// and first culls the children no lane enters; any other needs both slabs, and a packet
+    /// of finite directions culls with both.
+    #[inline(always)]
+    unsafe fn relative<const KIND: u8>(
+        node: &Node4,
+        l: &Lanes,
+        coh: &Coherent,
+    ) -> ([[f32; 4]; 6], u32, u32) {
+        let slab = |s: usize| -> __m128 {
+            debug_assert!(s < 6);
+            // SAFETY: slab indices are below 6 (`Coherent::new`, or 0..6 below).
+            (*node.bounds.get_unchecked(s)).into()
+        };
+        let mut rel = [[0f32; 4]; 6];
+        let mut cand = 0b1111;
+        // Children every active lane surely enters (coherent packets only).
+        let mut all = 0;
+        if KIND == COHERENT {
+            let near: [__m128; 3] = std::array::from_fn(|a| _mm_sub_ps(slab(coh.near[a]), l.o[a]));
+            let far: [__m128; 3] = std::array::from_fn(|a| _mm_sub_ps(slab(coh.far[a]), l.o[a]));
+            (cand, all) = coh.children(&near, &far);
+            for a in 0..3 {
+                _mm_storeu_ps(rel[2 * a].as_mut_ptr(), near[a]);
+                _mm_storeu_ps(rel[2 * a + 1].as_mut_ptr(), far[a]);
+            }
+        } else {
+            let both: [__m128; 6] = std::array::from_fn(|s| _mm_sub_ps(slab(s), l.o[s / 2]));
+            if KIND == FINITE {
+                cand = coh.children_finite(&both);
+            }
+            for (r, v) in rel.iter_mut().zip(both) {
+                _mm_storeu_ps(r.as_mut_ptr(), v);
+            }
+        }
+        (rel, cand, all)
     }
 
     /// Kinds of packet, by their active lanes' reciprocal directions: on each axis finite and
@@ -217,202 +557,117 @@ mod avx {
     const FINITE: u8 = 1;
     const ANY: u8 = 0;
 
-    /// The traversal, for a packet of kind `KIND` (see [`Coherent`]), its lanes tested eight
-    /// at a time or, with `WIDE` (and `l16`), sixteen. Inlined into [`traverse`] and
-    /// [`traverse16`], whose target features its intrinsics are compiled with.
+    /// The lanes of `mask` whose rays enter child `c` of a node (its slabs minus the origin
+    /// in `rel`, as [`relative`] lays them out), each by its own test, and where `NEAR` the
+    /// smallest of their entry distances (else ∞). For a packet of kind `KIND`, sixteen lanes
+    /// at a time with `WIDE` (and `l16`), else eight.
     #[inline(always)]
-    unsafe fn traverse_with<const KIND: u8, const WIDE: bool, F: FnMut(usize, u32) -> u32>(
-        bvh: &WideBvh,
+    unsafe fn enter<const KIND: u8, const WIDE: bool, const NEAR: bool>(
         l: &Lanes,
         l16: Option<&Lanes16>,
-        coh: &Coherent,
-        active: u32,
-        hit: &mut F,
-    ) -> u32 {
-        let widen = _mm256_set1_ps(1.0 + 2.0 * gamma(3));
-        let zero = _mm256_setzero_ps();
-        let inv = &l.inv;
-        // (node, lanes that entered it); left uninitialised, entries are written before read.
-        let mut stack = [const { MaybeUninit::<(u32, u32)>::uninit() }; STACK];
-        let mut len = 0;
-        let (mut cur, mut mask) = (bvh.root, active);
-        let mut occ = 0u32;
-        loop {
-            if cur & LEAF != 0 {
-                let first = ((cur & !LEAF) >> 4) as usize;
-                for p in first..first + (cur & 15) as usize {
-                    occ |= hit(p, mask);
-                    mask &= !occ;
-                    if mask == 0 {
-                        break;
-                    }
-                }
-                if occ == active {
-                    return occ;
-                }
-            } else {
-                let node = bvh.node(cur);
-                let slab = |s: usize| -> __m128 {
-                    debug_assert!(s < 6);
-                    // SAFETY: slab indices are below 6 (`Coherent::new`, or 0..6 below).
-                    (*node.bounds.get_unchecked(s)).into()
-                };
-                // The slabs relative to the origin, all four children at once: the single-ray
-                // test's `slab − o`, which the origin shared by all lanes lets us share too.
-                // A coherent packet needs only each axis's near and far slab (the same for
-                // all its lanes) and first culls the children no lane enters; any other
-                // needs both slabs, and a packet of finite directions culls with both.
-                let mut rel = [[0f32; 4]; 6];
-                let mut cand = 0b1111;
-                // Children every active lane surely enters (coherent packets only).
-                let mut all = 0;
+        rel: &[[f32; 4]; 6],
+        c: usize,
+        mask: u32,
+    ) -> (u32, f32) {
+        // The smallest lane of an eight-lane register (the others ∞), as a number.
+        let min8 = |v: __m256| {
+            let v = _mm_min_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps::<1>(v));
+            let v = _mm_min_ps(v, _mm_movehl_ps(v, v));
+            _mm_cvtss_f32(_mm_min_ss(v, _mm_movehdup_ps(v)))
+        };
+        if WIDE {
+            // The eight-lane test below, on all sixteen lanes at once: the same operations in
+            // the same order (AVX-512's max and min return the second operand on a NaN as
+            // AVX's do; the blend takes `hi` where the sign bit of 1/d is set, as blendv does).
+            let l16 = l16.unwrap_unchecked();
+            let lo: [__m512; 3] = std::array::from_fn(|a| _mm512_set1_ps(rel[2 * a][c]));
+            let hi: [__m512; 3] = std::array::from_fn(|a| _mm512_set1_ps(rel[2 * a + 1][c]));
+            let slabs = |a: usize| {
+                let inv = l16.inv[a];
                 if KIND == COHERENT {
-                    let near: [__m128; 3] =
-                        std::array::from_fn(|a| _mm_sub_ps(slab(coh.near[a]), l.o[a]));
-                    let far: [__m128; 3] =
-                        std::array::from_fn(|a| _mm_sub_ps(slab(coh.far[a]), l.o[a]));
-                    (cand, all) = coh.children(&near, &far);
-                    for a in 0..3 {
-                        _mm_storeu_ps(rel[2 * a].as_mut_ptr(), near[a]);
-                        _mm_storeu_ps(rel[2 * a + 1].as_mut_ptr(), far[a]);
-                    }
+                    (_mm512_mul_ps(lo[a], inv), _mm512_mul_ps(hi[a], inv))
                 } else {
-                    let both: [__m128; 6] =
-                        std::array::from_fn(|s| _mm_sub_ps(slab(s), l.o[s / 2]));
-                    if KIND == FINITE {
-                        cand = coh.children_finite(&both);
-                    }
-                    for (r, v) in rel.iter_mut().zip(both) {
-                        _mm_storeu_ps(r.as_mut_ptr(), v);
-                    }
+                    let neg =
+                        _mm512_cmplt_epi32_mask(_mm512_castps_si512(inv), _mm512_setzero_si512());
+                    (
+                        _mm512_mul_ps(_mm512_mask_blend_ps(neg, lo[a], hi[a]), inv),
+                        _mm512_mul_ps(_mm512_mask_blend_ps(neg, hi[a], lo[a]), inv),
+                    )
                 }
-                let mut next = EMPTY;
-                let mut next_mask = 0;
-                while cand != 0 {
-                    let c = cand.trailing_zeros() as usize;
-                    cand &= cand - 1;
-                    let child = node.child[c];
-                    if child == EMPTY {
-                        continue;
-                    }
-                    let m = if all & (1 << c) != 0 {
-                        // Entered by every active lane: no lane's own test can fail.
-                        mask
-                    } else if WIDE {
-                        // The eight-lane test below, on all sixteen lanes at once: the same
-                        // operations in the same order (AVX-512's max and min return the
-                        // second operand on a NaN as AVX's do; the blend takes `hi` where the
-                        // sign bit of 1/d is set, as blendv does).
-                        let l16 = l16.unwrap_unchecked();
-                        let lo: [__m512; 3] =
-                            std::array::from_fn(|a| _mm512_set1_ps(rel[2 * a][c]));
-                        let hi: [__m512; 3] =
-                            std::array::from_fn(|a| _mm512_set1_ps(rel[2 * a + 1][c]));
-                        let slabs = |a: usize| {
-                            let inv = l16.inv[a];
-                            if KIND == COHERENT {
-                                (_mm512_mul_ps(lo[a], inv), _mm512_mul_ps(hi[a], inv))
-                            } else {
-                                let neg = _mm512_cmplt_epi32_mask(
-                                    _mm512_castps_si512(inv),
-                                    _mm512_setzero_si512(),
-                                );
-                                (
-                                    _mm512_mul_ps(_mm512_mask_blend_ps(neg, lo[a], hi[a]), inv),
-                                    _mm512_mul_ps(_mm512_mask_blend_ps(neg, hi[a], lo[a]), inv),
-                                )
-                            }
-                        };
-                        let (tn_x, tf_x) = slabs(0);
-                        let (tn_y, tf_y) = slabs(1);
-                        let (tn_z, tf_z) = slabs(2);
-                        let tnear = _mm512_max_ps(
-                            _mm512_max_ps(_mm512_max_ps(tn_x, tn_y), tn_z),
-                            _mm512_setzero_ps(),
-                        );
-                        let tfar = _mm512_mul_ps(
-                            _mm512_min_ps(
-                                _mm512_min_ps(_mm512_min_ps(tf_x, tf_y), tf_z),
-                                l16.t_max,
-                            ),
-                            _mm512_set1_ps(1.0 + 2.0 * gamma(3)),
-                        );
-                        let enter = _mm512_cmp_ps_mask::<_CMP_LE_OQ>(tnear, tfar);
-                        enter as u32 & mask
-                    } else {
-                        // Per axis, the entry and exit distance of each lane: its near and far
-                        // slab times its 1/d. In a coherent packet `rel` holds them already; else
-                        // each lane picks them by the sign of its 1/d (blendv takes the second
-                        // operand where the sign bit is set). Eight lanes at a time, skipping
-                        // eights with no lane in the mask.
-                        let lo: [__m256; 3] =
-                            std::array::from_fn(|a| _mm256_set1_ps(rel[2 * a][c]));
-                        let hi: [__m256; 3] =
-                            std::array::from_fn(|a| _mm256_set1_ps(rel[2 * a + 1][c]));
-                        let mut m = 0;
-                        for h in 0..HALVES {
-                            if (mask >> (8 * h)) & 0xff == 0 {
-                                continue;
-                            }
-                            let slabs = |a: usize| {
-                                let inv = inv[a][h];
-                                if KIND == COHERENT {
-                                    (_mm256_mul_ps(lo[a], inv), _mm256_mul_ps(hi[a], inv))
-                                } else {
-                                    (
-                                        _mm256_mul_ps(_mm256_blendv_ps(lo[a], hi[a], inv), inv),
-                                        _mm256_mul_ps(_mm256_blendv_ps(hi[a], lo[a], inv), inv),
-                                    )
-                                }
-                            };
-                            let (tn_x, tf_x) = slabs(0);
-                            let (tn_y, tf_y) = slabs(1);
-                            let (tn_z, tf_z) = slabs(2);
-                            // The operand order of `RayBoxes::test` (max/min return the second
-                            // operand when either is NaN).
-                            let tnear =
-                                _mm256_max_ps(_mm256_max_ps(_mm256_max_ps(tn_x, tn_y), tn_z), zero);
-                            let tfar = _mm256_mul_ps(
-                                _mm256_min_ps(
-                                    _mm256_min_ps(_mm256_min_ps(tf_x, tf_y), tf_z),
-                                    l.t_max[h],
-                                ),
-                                widen,
-                            );
-                            let enter = _mm256_cmp_ps::<_CMP_LE_OQ>(tnear, tfar);
-                            m |= (_mm256_movemask_ps(enter) as u32) << (8 * h);
-                        }
-                        m & mask
-                    };
-                    if m == 0 {
-                        continue;
-                    }
-                    if next == EMPTY {
-                        (next, next_mask) = (child, m);
-                    } else {
-                        debug_assert!(len < STACK);
-                        stack.get_unchecked_mut(len).write((child, m));
-                        len += 1;
-                    }
-                }
-                if next != EMPTY {
-                    (cur, mask) = (next, next_mask);
-                    continue;
-                }
+            };
+            let (tn_x, tf_x) = slabs(0);
+            let (tn_y, tf_y) = slabs(1);
+            let (tn_z, tf_z) = slabs(2);
+            let tnear = _mm512_max_ps(
+                _mm512_max_ps(_mm512_max_ps(tn_x, tn_y), tn_z),
+                _mm512_setzero_ps(),
+            );
+            let tfar = _mm512_mul_ps(
+                _mm512_min_ps(_mm512_min_ps(_mm512_min_ps(tf_x, tf_y), tf_z), l16.t_max),
+                _mm512_set1_ps(WIDEN),
+            );
+            let enter = _mm512_cmp_ps_mask::<_CMP_LE_OQ>(tnear, tfar) & mask as u16;
+            let mut near = f32::INFINITY;
+            if NEAR {
+                let v = _mm512_mask_blend_ps(enter, _mm512_set1_ps(f32::INFINITY), tnear);
+                let hi = _mm512_extractf64x4_pd::<1>(_mm512_castps_pd(v));
+                near = min8(_mm256_min_ps(
+                    _mm512_castps512_ps256(v),
+                    _mm256_castpd_ps(hi),
+                ));
             }
-            // The next entry with a lane not yet known to be occluded.
-            loop {
-                if len == 0 {
-                    return occ;
+            return (u32::from(enter), near);
+        }
+        // Per axis, the entry and exit distance of each lane: its near and far slab times its
+        // 1/d. In a coherent packet `rel` holds them already; else each lane picks them by the
+        // sign of its 1/d (blendv takes the second operand where the sign bit is set). Eight
+        // lanes at a time, skipping eights with no lane in the mask.
+        let lo: [__m256; 3] = std::array::from_fn(|a| _mm256_set1_ps(rel[2 * a][c]));
+        let hi: [__m256; 3] = std::array::from_fn(|a| _mm256_set1_ps(rel[2 * a + 1][c]));
+        let mut m = 0;
+        let inf = _mm256_set1_ps(f32::INFINITY);
+        let mut near = inf;
+        for h in 0..HALVES {
+            if (mask >> (8 * h)) & 0xff == 0 {
+                continue;
+            }
+            let slabs = |a: usize| {
+                let inv = l.inv[a][h];
+                if KIND == COHERENT {
+                    (_mm256_mul_ps(lo[a], inv), _mm256_mul_ps(hi[a], inv))
+                } else {
+                    (
+                        _mm256_mul_ps(_mm256_blendv_ps(lo[a], hi[a], inv), inv),
+                        _mm256_mul_ps(_mm256_blendv_ps(hi[a], lo[a], inv), inv),
+                    )
                 }
-                len -= 1;
-                let (c, m) = stack.get_unchecked(len).assume_init();
-                if m & !occ != 0 {
-                    (cur, mask) = (c, m & !occ);
-                    break;
-                }
+            };
+            let (tn_x, tf_x) = slabs(0);
+            let (tn_y, tf_y) = slabs(1);
+            let (tn_z, tf_z) = slabs(2);
+            // The operand order of `RayBoxes::test` (max/min return the second operand when
+            // either is NaN).
+            let tnear = _mm256_max_ps(
+                _mm256_max_ps(_mm256_max_ps(tn_x, tn_y), tn_z),
+                _mm256_setzero_ps(),
+            );
+            let tfar = _mm256_mul_ps(
+                _mm256_min_ps(_mm256_min_ps(_mm256_min_ps(tf_x, tf_y), tf_z), l.t_max[h]),
+                _mm256_set1_ps(WIDEN),
+            );
+            let enter = _mm256_cmp_ps::<_CMP_LE_OQ>(tnear, tfar);
+            let bits = (_mm256_movemask_ps(enter) as u32) << (8 * h) & mask;
+            m |= bits;
+            if NEAR && bits != 0 {
+                // The lanes of `bits` as a mask, tested in place as `Coherent::new` does.
+                let word = _mm256_castsi256_ps(_mm256_set1_epi32((bits >> (8 * h)) as i32));
+                let one = _mm256_castsi256_ps(_mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128));
+                let lanes =
+                    _mm256_cmp_ps::<_CMP_NEQ_UQ>(_mm256_and_ps(word, one), _mm256_setzero_ps());
+                near = _mm256_min_ps(near, _mm256_blendv_ps(inf, tnear, lanes));
             }
         }
+        (m, if NEAR { min8(near) } else { f32::INFINITY })
     }
 
     /// A packet whose active lanes have finite reciprocal directions, taken as one ray with
@@ -429,7 +684,7 @@ mod avx {
     /// largest 1/d; the bounds of the lanes' entry and exit distances so obtained pass
     /// through the same max/min/widening as each lane's (monotonic too), so a lane with
     /// entry ≤ exit makes the bounds pass.
-    struct Coherent {
+    pub(super) struct Coherent {
         /// On every axis, the active lanes' 1/d have one sign (else only finite).
         one_sign: bool,
         near: [usize; 3],
@@ -556,7 +811,7 @@ mod avx {
             );
             let tfar = _mm_mul_ps(
                 _mm_min_ps(_mm_min_ps(_mm_min_ps(tf[0], tf[1]), tf[2]), self.t_max),
-                _mm_set1_ps(1.0 + 2.0 * gamma(3)),
+                _mm_set1_ps(WIDEN),
             );
             _mm_movemask_ps(_mm_cmple_ps(tnear, tfar)) as u32
         }
@@ -583,7 +838,7 @@ mod avx {
                 tf[a] = _mm_max_ps(f_lo, f_hi);
                 tf_lo[a] = _mm_min_ps(f_lo, f_hi);
             }
-            let widen = _mm_set1_ps(1.0 + 2.0 * gamma(3));
+            let widen = _mm_set1_ps(WIDEN);
             let zero = _mm_setzero_ps();
             let max3 = |t: [__m128; 3]| _mm_max_ps(_mm_max_ps(_mm_max_ps(t[0], t[1]), t[2]), zero);
             let min3 = |t: [__m128; 3], t_max| {

@@ -12,7 +12,7 @@
 
 use super::lanes::Lanes;
 use super::{RayStats, BATCH};
-use crate::accel::{ShadowPacket, PACKET};
+use crate::accel::{RayPacket, PACKET};
 use crate::geometry::ray::{offset_by, offset_ray_origin, SHADOW_EPSILON};
 use crate::geometry::Frame;
 use crate::light::{planar_point, PlanarLight};
@@ -167,7 +167,7 @@ fn planar_in<V: Lanes, const LAMBERT: bool>(vx: &Vertex, stats: &mut RayStats) -
     while i < n {
         let m = (n - i).min(BATCH as u32);
         let steps = m.div_ceil(V::N as u32) as usize;
-        let mut pk = ShadowPacket {
+        let mut pk = RayPacket {
             o: origins[0],
             d: [[0.0; PACKET]; 3],
             t_max: [1.0 - SHADOW_EPSILON; PACKET],

@@ -6,6 +6,7 @@ use crate::simd::{Float, Vector3};
 use super::simd::{F, M, U, V3};
 use super::{Trace, Wavefront};
 use crate::camera::Camera;
+use crate::accel::{RayPacket, PACKET};
 use crate::geometry::Ray;
 use crate::scene::Interaction;
 use glam::Vec3A;
@@ -33,6 +34,8 @@ pub(super) struct Lanes<S> {
     pub(super) has_prev: M,
     /// Lanes whose path ended at the last step, their samples not yet on the film.
     pub(super) done: M,
+    /// Lanes whose ray is their camera ray, not yet traced (from the camera's eye).
+    pub(super) fresh: M,
     /// The shadow rays of the last step's light samples, waiting to be traced.
     pub(super) shadow: Shadows,
     /// With `Trace::Scene`, the active lanes' hits, found for all groups at once before
@@ -87,6 +90,7 @@ impl Wavefront<'_> {
             active: 0,
             has_prev: 0,
             done: 0,
+            fresh: 0,
             shadow: Shadows {
                 nee: 0,
                 lanes: 0,
@@ -155,39 +159,80 @@ impl Wavefront<'_> {
     }
     }
 
-    /// The closest hits of every group's active lanes ([`Trace::Scene`]), their rays traced
-    /// together (`Scene::intersect_many`, which interleaves them where the scene outgrows
-    /// the cache), into each group's `hits`.
+    /// The closest hits of every group's active lanes ([`Trace::Scene`]), into each group's
+    /// `hits`: the camera rays, which share the eye, in packets of sixteen
+    /// (`Scene::intersect_packet`; the groups' fresh lanes hold consecutive camera samples),
+    /// and the other rays of all groups together (`Scene::intersect_many`, which interleaves
+    /// them where the scene outgrows the cache).
     fn trace_groups<S>(
         &self,
         groups: &mut [Lanes<S>],
         rays: &mut Vec<Ray>,
         hits: &mut Vec<Option<Interaction>>,
     ) {
+        // The camera rays, by group and lane (a single one is better served by its own
+        // traversal), and the lanes of each group that the packets leave.
+        let mut fresh = [(0, 0); 16 * GROUPS];
+        let mut n = 0;
+        for (g, st) in groups.iter().enumerate() {
+            for l in lanes(st.fresh & st.active) {
+                fresh[n] = (g, l);
+                n += 1;
+            }
+        }
+        let mut rest: [M; GROUPS] = std::array::from_fn(|g| groups.get(g).map_or(0, |st| st.active));
+        if n > 1 {
+            for chunk in fresh[..n].chunks(PACKET) {
+                self.trace_packet(groups, chunk);
+            }
+            for (rest, st) in rest.iter_mut().zip(groups.iter()) {
+                *rest &= !st.fresh;
+            }
+        }
         rays.clear();
-        for st in groups.iter() {
-            let mut m = st.active;
-            while m != 0 {
-                let l = m.trailing_zeros() as usize;
-                m &= m - 1;
-                let (o, d) = (&st.o, &st.d);
-                rays.push(Ray::new(
+        for (st, &rest) in groups.iter().zip(&rest) {
+            let (o, d) = (&st.o, &st.d);
+            rays.extend(lanes(rest).map(|l| {
+                Ray::new(
                     Vec3A::new(o[0][l], o[1][l], o[2][l]),
                     Vec3A::new(d[0][l], d[1][l], d[2][l]),
-                ));
-            }
+                )
+            }));
         }
         hits.clear();
         hits.resize(rays.len(), None);
         self.scene.intersect_many(rays, hits);
         let mut next = hits.iter();
-        for st in groups.iter_mut() {
-            let mut m = st.active;
-            while m != 0 {
-                let l = m.trailing_zeros() as usize;
-                m &= m - 1;
+        for (st, &rest) in groups.iter_mut().zip(&rest) {
+            for l in lanes(rest) {
                 st.hits[l] = *next.next().expect("one hit per ray");
             }
+            st.fresh = 0;
+        }
+    }
+
+    /// The closest hits of the camera rays of `chunk` (up to sixteen (group, lane) pairs,
+    /// the rays from one origin) in one packet, into their groups' `hits`.
+    fn trace_packet<S>(&self, groups: &mut [Lanes<S>], chunk: &[(usize, usize)]) {
+        let origin = |(g, l): (usize, usize)| {
+            let o = &groups[g].o;
+            Vec3A::new(o[0][l], o[1][l], o[2][l])
+        };
+        debug_assert!(chunk.iter().all(|&gl| origin(gl) == origin(chunk[0])));
+        let mut pk = RayPacket {
+            o: origin(chunk[0]),
+            d: [[0.0; PACKET]; 3],
+            t_max: [f32::INFINITY; PACKET],
+        };
+        for (k, &(g, l)) in chunk.iter().enumerate() {
+            for a in 0..3 {
+                pk.d[a][k] = groups[g].d[a][l];
+            }
+        }
+        let mut out = [None; PACKET];
+        self.scene.intersect_packet(&pk, (1 << chunk.len()) - 1, &mut out);
+        for (&(g, l), hit) in chunk.iter().zip(out) {
+            groups[g].hits[l] = hit;
         }
     }
 
@@ -217,7 +262,19 @@ impl Wavefront<'_> {
         F::select(fresh, F::splat(1.0), F::load(&st.eta2)).store(&mut st.eta2);
         U::select(fresh, U::splat(0), U::load(&st.depth)).store(&mut st.depth);
         st.has_prev &= !fresh;
+        st.fresh |= fresh;
         st.active |= fresh;
     }
     }
+}
+
+/// The lanes of `m`, lowest first.
+fn lanes(mut m: M) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (m != 0).then(|| {
+            let l = m.trailing_zeros() as usize;
+            m &= m - 1;
+            l
+        })
+    })
 }

@@ -19,9 +19,10 @@
 //! by brute force (`accel::flat`: at most 64 triangles and 4 spheres) and the triangles carry
 //! no vertex normals, the lanes test all sixteen rays against each primitive in turn
 //! ([`trace`]), the transpose of `accel::flat`, and look up shading data by primitive in
-//! tables of 64. Everywhere else the lanes' rays go to the scene's own queries, all
-//! groups' in one call (`Scene::intersect_many`, with `Scene::intersect`'s answers: the BVH,
-//! instances, masks), and the lanes take each hit's point and normals from its
+//! tables of 64. Everywhere else the lanes' rays go to the scene's own queries: the camera
+//! rays, which share the eye, in packets of sixteen (`Scene::intersect_packet`), the others
+//! of all groups in one call (`Scene::intersect_many`), both with `Scene::intersect`'s
+//! answers (the BVH, instances, masks), and the lanes take each hit's point and normals from its
 //! `Interaction`, with the shading data by material; the shadow rays go to
 //! `Scene::occluded_many` likewise.
 //!

@@ -6,7 +6,7 @@
 
 use super::simd::{F, M, V3};
 use super::Wavefront;
-use crate::accel::{ShadowPacket, PACKET};
+use crate::accel::{RayPacket, PACKET};
 use crate::geometry::ray::{offset_by, offset_push, offset_ray_origin, SHADOW_EPSILON};
 use crate::geometry::Frame;
 use crate::integrator::nee::{lambert_weight, shadow_dir, wrap};
@@ -142,7 +142,7 @@ impl Wavefront<'_> {
                     (0..m).fold(0u32, |acc, s| acc | (((x[s] >> lane) & 1) as u32) << s)
                 };
                 let (ok, down) = (bit(&good), bit(&under));
-                let mut pk = ShadowPacket {
+                let mut pk = RayPacket {
                     o: Vec3A::ZERO,
                     d: [[0.0; PACKET]; 3],
                     t_max: [1.0 - SHADOW_EPSILON; PACKET],
