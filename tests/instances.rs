@@ -312,9 +312,8 @@ fn many_overlapping_instances_agree_with_the_flattened_scene() {
         let flat_single: u32 = (0..chunk.len())
             .map(|l| (flat.occluded(&pk.ray(l), pk.t_max[l]) as u32) << l)
             .sum();
-        assert_eq!(inst.occluded_packet(&pk, active), single);
-        if let Some(avx) = inst.occluded_packet_avx(&pk, active) {
-            assert_eq!(avx, single);
+        for lanes in [1, 8, 16] {
+            assert_eq!(inst.occluded_packet_with(&pk, active, lanes), single);
         }
         differ += (single ^ flat_single).count_ones();
     }

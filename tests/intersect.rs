@@ -1018,9 +1018,10 @@ fn shadow_packets_match_single_rays() {
             (1 << PACKET) - 1
         };
         let got = soup.scene.occluded_packet(&pk, active);
-        // (Where the CPU has AVX-512 the call above used it; the AVX traversal too.)
-        if let Some(avx) = soup.scene.occluded_packet_avx(&pk, active) {
-            assert_eq!(avx, got, "packet {i}: AVX and AVX-512 traversals differ");
+        // (Where the CPU has AVX-512 the call above used it; eight lanes and one too.)
+        for lanes in [1, 8] {
+            let other = soup.scene.occluded_packet_with(&pk, active, lanes);
+            assert_eq!(other, got, "packet {i}: {lanes} lanes and 16 differ");
         }
         for lane in 0..PACKET {
             let want_lane = active & (1 << lane) != 0;

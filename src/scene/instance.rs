@@ -286,27 +286,15 @@ impl Instances {
         })
     }
 
-    /// The lanes of `active` that an instance blocks.
+    /// The lanes of `active` that an instance blocks, `lanes` rays at a time
+    /// (`Scene::occluded_packet_with`).
     #[inline(never)]
-    pub(super) fn occluded_packet(&self, pk: &RayPacket, active: u32) -> u32 {
-        self.tlas.occluded_packet(pk, active, |k, lanes| {
+    pub(super) fn occluded_packet_with(&self, pk: &RayPacket, active: u32, lanes: usize) -> u32 {
+        self.tlas.occluded_packet_with(pk, active, lanes, |k, m| {
             let inst = &self.placed[k];
             let group = &self.groups[inst.group as usize].scene;
-            group.occluded_packet(&inst.packet_in_object_space(pk), lanes)
+            group.occluded_packet_with(&inst.packet_in_object_space(pk), m, lanes)
         })
-    }
-
-    /// [`Instances::occluded_packet`] by the AVX traversal (None without AVX).
-    pub(super) fn occluded_packet_avx(&self, pk: &RayPacket, active: u32) -> Option<u32> {
-        let mut ok = true;
-        let hits = self.tlas.occluded_packet_avx(pk, active, |k, lanes| {
-            let inst = &self.placed[k];
-            let group = &self.groups[inst.group as usize].scene;
-            let hit = group.occluded_packet_avx(&inst.packet_in_object_space(pk), lanes);
-            ok &= hit.is_some();
-            hit.unwrap_or(0)
-        })?;
-        ok.then_some(hits)
     }
 
     /// The world bounds of all instances.

@@ -503,27 +503,21 @@ impl Scene {
     /// [`Scene::occluded`] for each, in one traversal.
     #[inline]
     pub fn occluded_packet(&self, pk: &RayPacket, active: u32) -> u32 {
-        let hits = self
-            .bvh
-            .occluded_packet(pk, active, |i, lanes| self.packet_hits(pk, i, lanes));
-        match &self.instances {
-            Some(inst) if hits != active => hits | inst.occluded_packet(pk, active & !hits),
-            _ => hits,
-        }
+        self.occluded_packet_with(pk, active, PACKET)
     }
 
-    /// [`Scene::occluded_packet`] without AVX-512, where the CPU has AVX (`None` where it
-    /// has not), for the tests to compare both packet traversals with single rays.
-    #[doc(hidden)]
-    pub fn occluded_packet_avx(&self, pk: &RayPacket, active: u32) -> Option<u32> {
+    /// [`Scene::occluded_packet`] with its box tests `lanes` (1, 8 or 16) rays at a time
+    /// where the CPU allows (sixteen with AVX-512, eight with AVX; else one): the same
+    /// answers each way, which the tests check by choosing.
+    pub fn occluded_packet_with(&self, pk: &RayPacket, active: u32, lanes: usize) -> u32 {
         let hits = self
             .bvh
-            .occluded_packet_avx(pk, active, |i, lanes| self.packet_hits(pk, i, lanes))?;
+            .occluded_packet_with(pk, active, lanes, |i, m| self.packet_hits(pk, i, m));
         match &self.instances {
             Some(inst) if hits != active => {
-                Some(hits | inst.occluded_packet_avx(pk, active & !hits)?)
+                hits | inst.occluded_packet_with(pk, active & !hits, lanes)
             }
-            _ => Some(hits),
+            _ => hits,
         }
     }
 

@@ -69,6 +69,19 @@ impl WideBvh {
         &self,
         pk: &RayPacket,
         active: u32,
+        hit: F,
+    ) -> u32 {
+        self.occluded_packet_with(pk, active, PACKET, hit)
+    }
+
+    /// [`Self::occluded_packet`] with its box tests `lanes` rays at a time, as
+    /// [`Self::closest_packet_with`] chooses them.
+    #[inline]
+    pub(crate) fn occluded_packet_with<F: FnMut(usize, u32) -> u32>(
+        &self,
+        pk: &RayPacket,
+        active: u32,
+        lanes: usize,
         mut hit: F,
     ) -> u32 {
         debug_assert!(active < 1 << PACKET);
@@ -76,40 +89,16 @@ impl WideBvh {
             return 0;
         }
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") {
-            let wide = std::arch::is_x86_feature_detected!("avx512f");
+        if lanes >= 8 && std::arch::is_x86_feature_detected!("avx") {
+            let wide = lanes >= PACKET && std::arch::is_x86_feature_detected!("avx512f");
             // SAFETY: the CPU has AVX, and AVX-512 where `wide`, checked just above.
             return unsafe { avx::run(self, pk, active, wide, &mut avx::Occlusion(&mut hit)) };
         }
         self.occluded_each(pk, active, hit)
     }
 
-    /// [`Self::occluded_packet`] with AVX only, never AVX-512, for the tests that compare
-    /// both with the single-ray traversal (`None` without AVX).
-    #[doc(hidden)]
-    pub fn occluded_packet_avx<F: FnMut(usize, u32) -> u32>(
-        &self,
-        pk: &RayPacket,
-        active: u32,
-        mut hit: F,
-    ) -> Option<u32> {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") {
-            if self.root == EMPTY || active == 0 {
-                return Some(0);
-            }
-            // SAFETY: the CPU has AVX, checked just above.
-            return Some(unsafe {
-                avx::run(self, pk, active, false, &mut avx::Occlusion(&mut hit))
-            });
-        }
-        let _ = (pk, active, &mut hit);
-        None
-    }
-
-    /// The same answers, each ray by the single-ray traversal: the fallback without AVX, and
-    /// what the tests compare the packet traversal with.
-    pub fn occluded_each<F: FnMut(usize, u32) -> u32>(
+    /// The same answers, each ray by the single-ray traversal: the fallback without AVX.
+    fn occluded_each<F: FnMut(usize, u32) -> u32>(
         &self,
         pk: &RayPacket,
         active: u32,
@@ -145,7 +134,7 @@ impl WideBvh {
     /// [`Self::closest_packet`] with its box tests `lanes` rays at a time: sixteen where
     /// `lanes` is 16 and the CPU has AVX-512, else eight where `lanes` is at least 8 and the
     /// CPU has AVX, else each ray on its own (the same answers each way, which the tests
-    /// check).
+    /// check; `Scene::occluded_packet_with` lets them choose).
     #[inline]
     pub(crate) fn closest_packet_with<F: FnMut(usize, u32, &mut [f32; PACKET]) -> u32>(
         &self,
