@@ -56,7 +56,7 @@ pub fn sq_to_f64(s: i128) -> f64 {
 /// `v as f64` (saturating like `as i128`), computed from the bits of `v` with integer
 /// operations only: an f32 is m·2^e with a 24-bit m, so the product is a shift of m. The f64
 /// path calls a software f64 → i128 conversion for every channel of every sample.
-#[inline]
+#[inline(always)]
 fn fixed_from_f32(v: f32, frac: i32) -> i128 {
     let bits = v.to_bits();
     let exp = ((bits >> 23) & 0xff) as i32;
@@ -74,7 +74,7 @@ fn fixed_from_f32(v: f32, frac: i32) -> i128 {
 }
 
 /// v² times 2^`frac`, rounded, for an f32 `v` (the square is exact: a 48-bit m²).
-#[inline]
+#[inline(always)]
 fn fixed_sq_from_f32(v: f32, frac: i32) -> i128 {
     let bits = v.to_bits() & 0x7fff_ffff;
     let exp = (bits >> 23) as i32;
@@ -87,7 +87,7 @@ fn fixed_sq_from_f32(v: f32, frac: i32) -> i128 {
 }
 
 /// m·2^s rounded half up, for m < 2^`width`; saturates at i128::MAX as `as i128` does.
-#[inline]
+#[inline(always)]
 fn shift_round(m: u128, s: i32, width: i32) -> i128 {
     if m == 0 {
         0
@@ -153,7 +153,7 @@ pub struct PixelSums {
 }
 
 impl PixelSums {
-    #[inline]
+    #[inline(always)]
     pub fn add(&mut self, l: Color) {
         for c in 0..3 {
             // Equal to fixed_sum(l[c] as f64) and fixed_sq((l[c] as f64)²), without floats.

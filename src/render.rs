@@ -232,7 +232,7 @@ pub(crate) fn camera_sample(
 
 /// Adds a sample's value `l` to its pixel's sums, or drops it if it is not finite (counted,
 /// with the first such pixel in scan order, whatever order the samples came in).
-#[inline]
+#[inline(always)]
 pub(crate) fn add_sample(
     px: &mut PixelSums,
     p: &TilePixel,
