@@ -509,6 +509,7 @@ impl Scene {
     /// [`Scene::occluded_packet`] with its box tests `lanes` (1, 8 or 16) rays at a time
     /// where the CPU allows (sixteen with AVX-512, eight with AVX; else one): the same
     /// answers each way, which the tests check by choosing.
+    #[inline]
     pub fn occluded_packet_with(&self, pk: &RayPacket, active: u32, lanes: usize) -> u32 {
         let hits = self
             .bvh

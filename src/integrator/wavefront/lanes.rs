@@ -5,8 +5,8 @@ use super::rng::LaneSampler;
 use crate::simd::{Float, Vector3};
 use super::simd::{F, M, U, V3};
 use super::{Trace, Wavefront};
-use crate::camera::Camera;
 use crate::accel::{RayPacket, PACKET};
+use crate::camera::Camera;
 use crate::geometry::Ray;
 use crate::scene::Interaction;
 use glam::Vec3A;
@@ -180,7 +180,8 @@ impl Wavefront<'_> {
                 n += 1;
             }
         }
-        let mut rest: [M; GROUPS] = std::array::from_fn(|g| groups.get(g).map_or(0, |st| st.active));
+        let mut rest: [M; GROUPS] =
+            std::array::from_fn(|g| groups.get(g).map_or(0, |st| st.active));
         if n > 1 {
             for chunk in fresh[..n].chunks(PACKET) {
                 self.trace_packet(groups, chunk);
