@@ -322,8 +322,10 @@ impl Wavefront<'_> {
         rays: &mut Vec<crate::geometry::Ray>,
     ) {
         use std::arch::x86_64::_pdep_u64;
-        // The rays, packed: origin and direction by axis. Room for every group's sixteen.
+        // The rays, packed: origin and direction by axis. Room for every group's sixteen,
+        // their answers a bit each of a u64.
         const ROOM: usize = 16 * GROUPS;
+        const { assert!(ROOM <= 64, "more shadow rays than bits in the answer") };
         let mut o = [[0f32; ROOM + 16]; 3];
         let mut d = [[0f32; ROOM + 16]; 3];
         let mut n = 0;
