@@ -84,7 +84,7 @@ impl WideBvh {
         lanes: usize,
         mut hit: F,
     ) -> u32 {
-        debug_assert!(active < 1 << PACKET);
+        debug_assert!(active < 1 << PACKET && matches!(lanes, 1 | 8 | PACKET));
         if self.root == EMPTY || active == 0 {
             return 0;
         }
@@ -143,7 +143,7 @@ impl WideBvh {
         lanes: usize,
         mut hit: F,
     ) -> u32 {
-        debug_assert!(active < 1 << PACKET);
+        debug_assert!(active < 1 << PACKET && matches!(lanes, 1 | 8 | PACKET));
         if self.root == EMPTY || active == 0 {
             return 0;
         }
