@@ -648,15 +648,21 @@ mod avx {
             let bits = (_mm256_movemask_ps(enter) as u32) << (8 * h) & mask;
             m |= bits;
             if NEAR && bits != 0 {
-                // The lanes of `bits` as a mask, tested in place as `Coherent::new` does.
-                let word = _mm256_castsi256_ps(_mm256_set1_epi32((bits >> (8 * h)) as i32));
-                let one = _mm256_castsi256_ps(_mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128));
-                let lanes =
-                    _mm256_cmp_ps::<_CMP_NEQ_UQ>(_mm256_and_ps(word, one), _mm256_setzero_ps());
+                let lanes = lanes8(bits >> (8 * h));
                 near = _mm256_min_ps(near, _mm256_blendv_ps(inf, tnear, lanes));
             }
         }
         (m, if NEAR { min8(near) } else { f32::INFINITY })
+    }
+
+    /// The lanes of the low eight bits of `bits` as an AVX mask (lane l set where bit l
+    /// is): each lane's bit tested in place, the integer bits compared as tiny non-zero
+    /// floats (AVX1 has no integer compare).
+    #[inline(always)]
+    unsafe fn lanes8(bits: u32) -> __m256 {
+        let word = _mm256_castsi256_ps(_mm256_set1_epi32(bits as i32));
+        let one = _mm256_castsi256_ps(_mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128));
+        _mm256_cmp_ps::<_CMP_NEQ_UQ>(_mm256_and_ps(word, one), _mm256_setzero_ps())
     }
 
     /// A packet whose active lanes have finite reciprocal directions, taken as one ray with
@@ -704,15 +710,10 @@ mod avx {
         #[inline]
         #[target_feature(enable = "avx")]
         fn new(l: &Lanes, active: u32) -> Option<Coherent> {
-            // The active lanes as masks, eight at a time: lane l's bit of `active`, tested
-            // in place (the integer bits compare as tiny non-zero floats; AVX1 has no
-            // integer compare).
-            let bits = _mm256_castsi256_ps(_mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128));
-            let on: [__m256; HALVES] = std::array::from_fn(|h| {
-                let word = _mm256_set1_epi32((active >> (8 * h)) as i32);
-                let set = _mm256_and_ps(_mm256_castsi256_ps(word), bits);
-                _mm256_cmp_ps::<_CMP_NEQ_UQ>(set, _mm256_setzero_ps())
-            });
+            // The active lanes as masks, eight at a time.
+            // SAFETY: the CPU has AVX (this function's feature).
+            let on: [__m256; HALVES] =
+                std::array::from_fn(|h| unsafe { lanes8(active >> (8 * h)) });
             let (inf, ninf) = (
                 _mm256_set1_ps(f32::INFINITY),
                 _mm256_set1_ps(f32::NEG_INFINITY),
