@@ -8,7 +8,7 @@ use libfuzzer_sys::fuzz_target;
 fuzz_target!(|data: &[u8]| {
     let raw = data.len() % 2 == 0;
     if let Ok(b) = mcrt::texture::Bitmap::decode(data, raw) {
-        assert_eq!(b.pixels.len() as u64, b.width as u64 * b.height as u64);
-        assert!(b.pixels.iter().all(|p| p.is_finite() && p.min_element() >= 0.0));
+        assert_eq!(b.pixels().len() as u64, b.width as u64 * b.height as u64);
+        assert!(b.pixels().all(|p| p.is_finite() && p.min_element() >= 0.0));
     }
 });

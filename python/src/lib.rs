@@ -719,7 +719,7 @@ fn read_image(path: &Path) -> Result<Image, mcrt::Error> {
             Ok(Image {
                 width: b.width,
                 height: b.height,
-                pixels: b.pixels,
+                pixels: b.pixels().collect(),
             })
         }
     }

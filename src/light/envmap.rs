@@ -67,7 +67,7 @@ impl EnvMap {
     /// (checked by [`fault`] first; only its rotation is used).
     pub fn new(image: &Bitmap, scale: f32, to_world: Mat3) -> EnvMap {
         let (w, h) = (image.width as usize, image.height as usize);
-        let data: Vec<Color> = image.pixels.iter().map(|&c| c * scale).collect();
+        let data: Vec<Color> = image.pixels().map(|c| c * scale).collect();
         let s = to_world.determinant().abs().cbrt();
         let rot = if s.is_finite() && s > 0.0 {
             to_world * (1.0 / s)

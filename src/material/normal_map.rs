@@ -141,7 +141,7 @@ pub fn float_gradient(tex: &Texture, uv: Vec2) -> Vec2 {
     let (w, h) = (bm.width as i64, bm.height as i64);
     let x = [b.wrap.wrap(xi, w), b.wrap.wrap(xi.saturating_add(1), w)];
     let y = [b.wrap.wrap(yi, h), b.wrap.wrap(yi.saturating_add(1), h)];
-    let f = |i: usize, j: usize| luminance(bm.pixels[y[j] * bm.width as usize + x[i]]);
+    let f = |i: usize, j: usize| luminance(bm.pixel(y[j] * bm.width as usize + x[i]));
     let (f00, f10, f01, f11) = (f(0, 0), f(1, 0), f(0, 1), f(1, 1));
     // Partials in pixel units, then through the transpose of to_uv's linear part
     // (bitmap.cpp, eval_1_grad).

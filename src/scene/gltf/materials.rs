@@ -420,7 +420,7 @@ impl Loader<'_> {
         if matches!(map, Map::Affine(m, a) if m == Color::ONE && a == Color::ZERO) {
             return Ok(bitmap);
         }
-        let px = bitmap.pixels.iter().map(|p| map.apply(*p)).collect();
+        let px = bitmap.pixels().map(|p| map.apply(p)).collect();
         Ok(Arc::new(
             Bitmap::from_pixels(bitmap.width, bitmap.height, px)
                 .map_err(|e| self.err(format!("{what}: {e}")))?,
