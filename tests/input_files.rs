@@ -188,9 +188,10 @@ fn exr_block_buffers_count_in_the_memory_check() {
     refused(&o, &["sums-wide-zip-block.exr", "pixels", "memory"], &out);
 }
 
-/// Class 1: a PNG texture of 16384² grey pixels (a few hundred kB of zeros) decodes to
-/// 256 MiB of samples and 3 GiB of linear pixels: refused by the memory check, named with
-/// its size, not an abort under a 3 GiB address space.
+/// Class 1: a PNG texture of 16384² 16-bit grey pixels (about a megabyte of zeros) decodes
+/// to 512 MiB of samples and 3 GiB of linear pixels: refused by the memory check, named with
+/// its size, not an abort under a 3 GiB address space. (16-bit images are kept as floats;
+/// 8-bit ones as bytes, which at this size would fit.)
 #[test]
 fn png_texture_larger_than_memory_is_refused() {
     let dir = TempDir::new("png-huge");
@@ -200,10 +201,10 @@ fn png_texture_larger_than_memory_is_refused() {
         let f = std::io::BufWriter::new(std::fs::File::create(&png_path).unwrap());
         let mut enc = png::Encoder::new(f, n, n);
         enc.set_color(png::ColorType::Grayscale);
-        enc.set_depth(png::BitDepth::Eight);
+        enc.set_depth(png::BitDepth::Sixteen);
         enc.set_compression(png::Compression::Fast);
         let mut w = enc.write_header().unwrap().into_stream_writer().unwrap();
-        let row = vec![0u8; n as usize];
+        let row = vec![0u8; 2 * n as usize];
         for _ in 0..n {
             std::io::Write::write_all(&mut w, &row).unwrap();
         }
