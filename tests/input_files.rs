@@ -188,7 +188,7 @@ fn exr_block_buffers_count_in_the_memory_check() {
     refused(&o, &["sums-wide-zip-block.exr", "pixels", "memory"], &out);
 }
 
-/// Class 1: a PNG texture of 16384² 16-bit grey pixels (about a megabyte of zeros) decodes
+/// Class 1: a PNG texture of 16384² 16-bit grey pixels (a small file: all zeros) decodes
 /// to 512 MiB of samples and 3 GiB of linear pixels: refused by the memory check, named with
 /// its size, not an abort under a 3 GiB address space. (16-bit images are kept as floats;
 /// 8-bit ones as bytes, which at this size would fit.)
