@@ -24,7 +24,13 @@ and render it with the same resolution, samples per pixel, path length and threa
    faster sampler.
 
 usage: .venv/bin/python bench/side_by_side.py [--quick] [--threads N] [--scenes a,b,...]
+                                               [--max-isa avx2]
        .venv/bin/python bench/side_by_side.py --validate SPP   (image means of both, no timing)
+--max-isa avx2 times both renderers as an AVX2 host runs them, on an AVX-512 host: mcrt with
+MCRT_MAX_ISA=avx2 (no AVX-512 kernel), Mitsuba's Dr.Jit generating code for znver3 (AVX2, eight
+lanes, through its `jit_llvm_set_target`) and its Embree with max_isa=avx2 (a small preloaded
+library, bench/embree_max_isa.c, compiled with cc, adds it to the device's configuration).
+
 Needs: pip install mitsuba numpy; Debian's libllvm19 for Mitsuba's LLVM variant; cargo (the
 script runs `cargo build --release` unless --no-build). The generated scenes are made by
 bench/make_scenes.py when missing.
@@ -124,7 +130,8 @@ def mcrt_render(xml, sampler, seed, threads):
     out = xml[:-4] + ".mcrt.exr"
     cmd = [MCRT, "render", xml, "-o", out, "--threads", str(threads), "--sampler", sampler,
            "--seed", str(seed)]
-    p = subprocess.run(cmd, capture_output=True, text=True)
+    env = {k: v for k, v in os.environ.items() if k != "LD_PRELOAD"}
+    p = subprocess.run(cmd, capture_output=True, text=True, env=env)
     if p.returncode != 0:
         sys.exit(f"{' '.join(cmd)} failed:\n{p.stderr}")
     m = re.search(r"(\d+)x(\d+) at (\d+) spp .*loaded in ([0-9.]+) s\) in ([0-9.]+) s", p.stderr)
@@ -270,6 +277,34 @@ def validate(names, res, spp, threads):
               f"{a.mean() / b.mean() - 1:+.4f} | {d.mean() / se:+.2f} |", flush=True)
 
 
+def cap_isa(isa):
+    """Both renderers limited to ISA (only "avx2"): mcrt by MCRT_MAX_ISA; Mitsuba's Embree by
+    the preloaded bench/embree_max_isa.c (the script runs itself again with it preloaded), its
+    Dr.Jit by a target without AVX-512. Returns a line saying what each runs."""
+    shim = os.path.join(OUT, "embree_max_isa.so")
+    if os.environ.get("LD_PRELOAD") != shim:
+        os.makedirs(OUT, exist_ok=True)
+        subprocess.run(["cc", "-shared", "-fPIC", "-O2", "-o", shim,
+                        os.path.join(ROOT, "bench", "embree_max_isa.c"), "-ldl"], check=True)
+        os.environ.update(LD_PRELOAD=shim, EMBREE_MAX_ISA=isa)
+        os.execv(sys.executable, [sys.executable] + sys.argv)
+    os.environ["MCRT_MAX_ISA"] = isa
+    import ctypes
+    core = ctypes.CDLL(os.path.join(os.path.dirname(dr.__file__), "libdrjit-core.so"))
+    # jit.h's C++ names: jit_llvm_set_target, jit_llvm_target_cpu, jit_llvm_vector_width.
+    set_target = core._Z19jit_llvm_set_targetPKcS0_j
+    set_target.argtypes = [ctypes.c_char_p, ctypes.c_char_p, ctypes.c_uint32]
+    cpu = core._Z19jit_llvm_target_cpuv
+    cpu.restype = ctypes.c_char_p
+    width = core._Z21jit_llvm_vector_widthv
+    width.restype = ctypes.c_uint32
+    mi.set_variant("llvm_ad_rgb")
+    dr.eval(dr.llvm.Float(1.0) + 1)  # the LLVM backend started, so that the target sticks
+    set_target(b"znver3", None, 8)
+    return (f"ISA capped at {isa}: mcrt MCRT_MAX_ISA={isa}; Mitsuba's Dr.Jit targets "
+            f"{cpu().decode()} with {width()} lanes, its Embree max_isa={isa}")
+
+
 def cpu_line():
     model, flags = platform.processor() or "unknown CPU", set()
     try:
@@ -298,6 +333,8 @@ def main():
                     "the two renderers' image means at --validate-res² with SPP samples")
     ap.add_argument("--validate-res", type=int, default=64)
     ap.add_argument("--json", default=os.path.join(OUT, "side-by-side.json"))
+    ap.add_argument("--max-isa", choices=["avx2"], help="time both renderers as an AVX2 host "
+                    "runs them (see the module's documentation)")
     a = ap.parse_args()
     names = [n for n in a.scenes.split(",") if n]
     for n in names:
@@ -316,6 +353,7 @@ def main():
     if any(SCENES[n][1] is None for n in names):  # deterministic, so rewriting is harmless
         subprocess.run([sys.executable, os.path.join(ROOT, "bench", "make_scenes.py")],
                        check=True, stdout=subprocess.DEVNULL)
+    capped = cap_isa(a.max_isa) if a.max_isa else None
     mi.set_variant("scalar_rgb")
     dr.set_thread_count(a.threads)
     dr.set_flag(dr.JitFlag.KernelHistory, True)
@@ -325,6 +363,8 @@ def main():
                             capture_output=True, text=True).stdout.strip()
     t_start = time.time()
     print(f"machine: {cpu_line()}; {platform.system()} {platform.release()}")
+    if capped:
+        print(capped)
     print(f"threads {a.threads}; mcrt {commit}; Mitsuba {mi.__version__}; "
           f"{'--quick: ' if a.quick else ''}rate at {spp_rate} spp, error at {ERR_RES}² with "
           f"{base_spp} spp; {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}", flush=True)

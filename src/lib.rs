@@ -13,6 +13,7 @@ pub mod aov;
 pub mod camera;
 pub mod checkpoint;
 pub mod compare;
+pub mod cpu;
 pub mod denoise;
 pub mod film;
 pub mod geometry;

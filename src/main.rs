@@ -345,13 +345,17 @@ const SIGNAL_BURST: std::time::Duration = std::time::Duration::from_millis(500);
 
 fn main() {
     let cli = Cli::parse();
-    let result = match cli.command {
-        Command::Render(args) => render(*args),
-        Command::Merge(args) => merge(args).map(|_| 0),
-        Command::Compare(args) => compare(args).map(|_| 0),
-        Command::Photons(args) => photons(args).map(|_| 0),
-        Command::Denoise(args) => denoise(args).map(|_| 0),
-    };
+    // The kernels read the cap (`mcrt::cpu`) where they first run; a value they would
+    // ignore is refused here.
+    let result = mcrt::cpu::max_isa()
+        .map_err(mcrt::Error::Usage)
+        .and_then(|_| match cli.command {
+            Command::Render(args) => render(*args),
+            Command::Merge(args) => merge(args).map(|_| 0),
+            Command::Compare(args) => compare(args).map(|_| 0),
+            Command::Photons(args) => photons(args).map(|_| 0),
+            Command::Denoise(args) => denoise(args).map(|_| 0),
+        });
     match result {
         Ok(0) => {}
         Ok(code) => std::process::exit(code),

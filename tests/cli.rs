@@ -610,3 +610,48 @@ fn photon_maps_beyond_memory_are_refused() {
     }
     assert!(!out.exists());
 }
+
+/// `MCRT_MAX_ISA=avx2` keeps AVX-512 code from running (`mcrt::cpu`): the image is the same
+/// bits as uncapped (every kernel computes the same), `--backend avx512` is refused under it,
+/// and a value outside the accepted ones is refused with status 2 and nothing written.
+#[test]
+fn max_isa_caps_the_kernels_not_the_image() {
+    let dir = TempDir::new("max-isa");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mitsuba/cornell-box.xml");
+    let render = |cap: &str, name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let o = std::process::Command::new(BIN)
+            .env("MCRT_MAX_ISA", cap)
+            .arg("render")
+            .arg(&scene)
+            .arg("-o")
+            .arg(&out)
+            .args(["--spp", "4", "--width", "48", "--height", "48", "-q"])
+            .args(extra)
+            .output()
+            .expect("cannot run the mcrt binary");
+        (o, out)
+    };
+    let (o, plain) = render("", "plain.exr", &[]);
+    assert!(o.status.success(), "{}", stderr_of(&o));
+    let (o, capped) = render("avx2", "avx2.exr", &[]);
+    assert!(o.status.success(), "{}", stderr_of(&o));
+    assert_eq!(
+        std::fs::read(&plain).unwrap(),
+        std::fs::read(&capped).unwrap()
+    );
+    let (o, out) = render("avx2", "refused.exr", &["--backend", "avx512"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr_of(&o));
+    assert!(stderr_of(&o).contains("MCRT_MAX_ISA"), "{}", stderr_of(&o));
+    assert!(!out.exists());
+    let (o, out) = render("sse", "bad.exr", &[]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr_of(&o));
+    for want in ["MCRT_MAX_ISA", "\"sse\"", "avx512", "avx2"] {
+        assert!(
+            stderr_of(&o).contains(want),
+            "{want:?} missing from:\n{}",
+            stderr_of(&o)
+        );
+    }
+    assert!(!out.exists());
+}

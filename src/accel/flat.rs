@@ -52,7 +52,7 @@ impl Kernel {
     /// Whether this CPU runs the kernel.
     pub fn available(self) -> bool {
         match self {
-            Kernel::Avx512 => std::arch::is_x86_feature_detected!("avx512f"),
+            Kernel::Avx512 => crate::cpu::avx512(),
             Kernel::Avx => std::arch::is_x86_feature_detected!("avx"),
         }
     }

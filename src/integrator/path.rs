@@ -36,8 +36,9 @@ impl<'a> PathTracer<'a> {
         let lanes = false;
         if matches!(s.backend, Backend::Avx512 | Backend::Avx2) && !lanes {
             return Err(RenderError::Unsupported(format!(
-                "--backend {} needs a CPU with it, a scene the wavefront takes and settings it \
-                 runs (see docs/performance.md); --backend auto picks what runs",
+                "--backend {} needs a CPU with it (and MCRT_MAX_ISA not below it), a scene the \
+                 wavefront takes and settings it runs (see docs/performance.md); --backend \
+                 auto picks what runs",
                 s.backend.name()
             )));
         }

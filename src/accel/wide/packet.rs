@@ -90,7 +90,7 @@ impl WideBvh {
         }
         #[cfg(target_arch = "x86_64")]
         if lanes >= 8 && std::arch::is_x86_feature_detected!("avx") {
-            let wide = lanes >= PACKET && std::arch::is_x86_feature_detected!("avx512f");
+            let wide = lanes >= PACKET && crate::cpu::avx512();
             // SAFETY: the CPU has AVX, and AVX-512 where `wide`, checked just above.
             return unsafe { avx::run(self, pk, active, wide, &mut avx::Occlusion(&mut hit)) };
         }
@@ -149,7 +149,7 @@ impl WideBvh {
         }
         #[cfg(target_arch = "x86_64")]
         if lanes >= 8 && std::arch::is_x86_feature_detected!("avx") {
-            let wide = lanes >= PACKET && std::arch::is_x86_feature_detected!("avx512f");
+            let wide = lanes >= PACKET && crate::cpu::avx512();
             let mut walk = avx::Closest {
                 hit: &mut hit,
                 t_max: pk.t_max,

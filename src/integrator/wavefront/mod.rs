@@ -129,7 +129,7 @@ impl Backend {
             render::Backend::Avx2 => (false, true),
         };
         if avx512
-            && std::arch::is_x86_feature_detected!("avx512f")
+            && crate::cpu::avx512()
             && std::arch::is_x86_feature_detected!("avx512dq")
             && std::arch::is_x86_feature_detected!("bmi2")
         {
