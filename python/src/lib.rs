@@ -490,6 +490,8 @@ fn render<'py>(
     photons_per_iteration: Option<u64>,
     initial_radius: Option<f32>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    // The kernels ignore a cap they do not know (`mcrt::cpu`); refused here, as the CLI does.
+    mcrt::cpu::max_isa().map_err(usage)?;
     let (arc, path) = match scene.cast::<PyScene>() {
         Ok(s) => (s.get().scene.clone(), s.get().path.clone()),
         Err(_) => {

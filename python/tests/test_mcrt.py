@@ -186,6 +186,12 @@ def test_bad_names_raise_usage_errors():
         mcrt.render(CORNELL, spp=1, width=4, height=4, integrator="sppm", aovs="albedo")
 
 
+def test_unknown_isa_cap_is_a_usage_error(monkeypatch):
+    monkeypatch.setenv("MCRT_MAX_ISA", "sse")
+    with pytest.raises(mcrt.UsageError, match="MCRT_MAX_ISA"):
+        mcrt.render(CORNELL, spp=1, width=4, height=4)
+
+
 def test_time_budget_is_checked_as_the_flag():
     for t in [0, -1.0, float("nan"), "0s", "5 parsecs"]:
         with pytest.raises(mcrt.UsageError, match="duration"):
