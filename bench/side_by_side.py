@@ -332,10 +332,13 @@ def main():
     ap.add_argument("--validate", type=int, metavar="SPP", help="instead of timing, compare "
                     "the two renderers' image means at --validate-res² with SPP samples")
     ap.add_argument("--validate-res", type=int, default=64)
-    ap.add_argument("--json", default=os.path.join(OUT, "side-by-side.json"))
+    ap.add_argument("--json", help="where the figures go (default bench/out/side-by-side.json, "
+                    "or side-by-side-avx2.json with --max-isa avx2)")
     ap.add_argument("--max-isa", choices=["avx2"], help="time both renderers as an AVX2 host "
                     "runs them (see the module's documentation)")
     a = ap.parse_args()
+    a.json = a.json or os.path.join(
+        OUT, f"side-by-side{'-' + a.max_isa if a.max_isa else ''}.json")
     names = [n for n in a.scenes.split(",") if n]
     for n in names:
         if n not in SCENES:
@@ -372,7 +375,7 @@ def main():
     for name in names:
         src, ref, res = SCENES[name]
         src = os.path.join(ROOT, src)
-        r = results[name] = {"rate_res": res}
+        r = results[name] = {"rate_res": res, "max_isa": a.max_isa or "native"}
         print(f"\n{name}:", flush=True)
         px = res * res
         xml = scene_xml(name + "-rate", src, res, spp_rate, "independent")
