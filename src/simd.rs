@@ -14,6 +14,20 @@
 use glam::{BVec4A, Vec3, Vec3A, Vec4};
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
+/// The lanes of a bit mask (bit i: lane i), lowest first: the loop over a packet's or a
+/// lane vector's active lanes.
+#[inline(always)]
+pub fn lanes_of(mask: u32) -> impl Iterator<Item = usize> {
+    let mut m = mask;
+    std::iter::from_fn(move || {
+        (m != 0).then(|| {
+            let l = m.trailing_zeros() as usize;
+            m &= m - 1;
+            l
+        })
+    })
+}
+
 /// f32 lanes: `f32` itself, or a SIMD vector of them.
 pub trait Float:
     Copy

@@ -13,6 +13,7 @@
 
 use super::{Interaction, Scene, NO_HIT};
 use crate::accel::{RayPacket, PACKET};
+use crate::simd::lanes_of;
 
 impl Scene {
     /// The closest hits of the lanes of `active` of `pk` into `out` by lane (the other lanes
@@ -45,11 +46,11 @@ impl Scene {
         let found = if self.is_flat() {
             // Brute force, faster than any tree for single rays, takes them one by one.
             let mut found = 0;
-            for_lanes(active, |l| {
+            for l in lanes_of(active) {
                 if let Some(hit) = self.closest(&pk.ray(l), f32::INFINITY) {
                     (best[l], found) = (hit, found | 1 << l);
                 }
-            });
+            }
             found
         } else if self.masked {
             self.closest_lanes(pk, active, lanes, &mut best, |l, i, u, v, t| {
@@ -58,10 +59,10 @@ impl Scene {
         } else {
             self.closest_lanes(pk, active, lanes, &mut best, |_, _, _, _, _| true)
         };
-        for_lanes(active, |l| {
+        for l in lanes_of(active) {
             let hit = (found >> l & 1 != 0).then_some(best[l]);
             out[l] = self.interaction_of(&pk.ray(l), hit);
-        });
+        }
     }
 
     /// `Scene::closest_kept` for the lanes of `active` of `pk` in one traversal: into `best`
@@ -79,23 +80,14 @@ impl Scene {
         self.bvh
             .closest_packet_with(pk, active, lanes, |i, lanes, t_max| {
                 let mut nearer = 0;
-                for_lanes(lanes, |l| {
+                for l in lanes_of(lanes) {
                     let keep = |i, u, v, t| keep(l, i, u, v, t);
                     if let Some(t) = self.keep_nearer(&pk.ray(l), &mut best[l], i, t_max[l], &keep)
                     {
                         (t_max[l], nearer) = (t, nearer | 1 << l);
                     }
-                });
+                }
                 nearer
             })
-    }
-}
-
-/// Calls `f` with each lane of `mask` (bit i: lane i), lowest first.
-#[inline(always)]
-fn for_lanes(mut mask: u32, mut f: impl FnMut(usize)) {
-    while mask != 0 {
-        f(mask.trailing_zeros() as usize);
-        mask &= mask - 1;
     }
 }

@@ -89,9 +89,8 @@ impl WideBvh {
             return 0;
         }
         #[cfg(target_arch = "x86_64")]
-        if lanes >= 8 && std::arch::is_x86_feature_detected!("avx") {
-            let wide = lanes >= PACKET && crate::cpu::avx512();
-            // SAFETY: the CPU has AVX, and AVX-512 where `wide`, checked just above.
+        if let Some(wide) = avx::width(lanes) {
+            // SAFETY: `avx::width` checked the CPU's AVX, and AVX-512 where `wide`.
             return unsafe { avx::run(self, pk, active, wide, &mut avx::Occlusion(&mut hit)) };
         }
         self.occluded_each(pk, active, hit)
@@ -105,10 +104,7 @@ impl WideBvh {
         mut hit: F,
     ) -> u32 {
         let mut occ = 0;
-        let mut m = active;
-        while m != 0 {
-            let lane = m.trailing_zeros() as usize;
-            m &= m - 1;
+        for lane in crate::simd::lanes_of(active) {
             if self.occluded(&pk.ray(lane), pk.t_max[lane], |p, _| hit(p, 1 << lane) != 0) {
                 occ |= 1 << lane;
             }
@@ -148,13 +144,12 @@ impl WideBvh {
             return 0;
         }
         #[cfg(target_arch = "x86_64")]
-        if lanes >= 8 && std::arch::is_x86_feature_detected!("avx") {
-            let wide = lanes >= PACKET && crate::cpu::avx512();
+        if let Some(wide) = avx::width(lanes) {
             let mut walk = avx::Closest {
                 hit: &mut hit,
                 t_max: pk.t_max,
             };
-            // SAFETY: the CPU has AVX, and AVX-512 where `wide`, checked just above.
+            // SAFETY: `avx::width` checked the CPU's AVX, and AVX-512 where `wide`.
             return unsafe { avx::run(self, pk, active, wide, &mut walk) };
         }
         self.closest_each(pk, active, hit)
@@ -169,10 +164,7 @@ impl WideBvh {
     ) -> u32 {
         let mut t_max = pk.t_max;
         let mut found = 0;
-        let mut m = active;
-        while m != 0 {
-            let lane = m.trailing_zeros() as usize;
-            m &= m - 1;
+        for lane in crate::simd::lanes_of(active) {
             let ray = pk.ray(lane);
             if self.intersect(&ray, t_max[lane], |p, t| {
                 t_max[lane] = t;
@@ -239,6 +231,15 @@ mod avx {
             coh: &Coherent,
             active: u32,
         ) -> u32;
+    }
+
+    /// How a packet whose box tests may take `lanes` rays at a time (1, 8 or 16) runs here:
+    /// `Some(true)` sixteen at a time (the CPU may run AVX-512: `crate::cpu`), `Some(false)`
+    /// eight (AVX), `None` each ray on its own. One place for both walks' choice.
+    #[inline]
+    pub(super) fn width(lanes: usize) -> Option<bool> {
+        (lanes >= 8 && std::arch::is_x86_feature_detected!("avx"))
+            .then(|| lanes >= PACKET && crate::cpu::avx512())
     }
 
     /// Runs `w` for the lanes of `active` of `pk`, sixteen lanes at a time where `wide`

@@ -2,7 +2,7 @@
 //! steps, and the loop that feeds them camera samples and steps them.
 
 use super::rng::LaneSampler;
-use crate::simd::{Float, Vector3};
+use crate::simd::{lanes_of, Float, Vector3};
 use super::simd::{F, M, U, V3};
 use super::{Trace, Wavefront};
 use crate::accel::{RayPacket, PACKET};
@@ -175,7 +175,7 @@ impl Wavefront<'_> {
         let mut fresh = [(0, 0); 16 * GROUPS];
         let mut n = 0;
         for (g, st) in groups.iter().enumerate() {
-            for l in lanes(st.fresh & st.active) {
+            for l in lanes_of(u32::from(st.fresh & st.active)) {
                 fresh[n] = (g, l);
                 n += 1;
             }
@@ -193,7 +193,7 @@ impl Wavefront<'_> {
         rays.clear();
         for (st, &rest) in groups.iter().zip(&rest) {
             let (o, d) = (&st.o, &st.d);
-            rays.extend(lanes(rest).map(|l| {
+            rays.extend(lanes_of(u32::from(rest)).map(|l| {
                 Ray::new(
                     Vec3A::new(o[0][l], o[1][l], o[2][l]),
                     Vec3A::new(d[0][l], d[1][l], d[2][l]),
@@ -205,7 +205,7 @@ impl Wavefront<'_> {
         self.scene.intersect_many(rays, hits);
         let mut next = hits.iter();
         for (st, &rest) in groups.iter_mut().zip(&rest) {
-            for l in lanes(rest) {
+            for l in lanes_of(u32::from(rest)) {
                 st.hits[l] = *next.next().expect("one hit per ray");
             }
             st.fresh = 0;
@@ -269,13 +269,3 @@ impl Wavefront<'_> {
     }
 }
 
-/// The lanes of `m`, lowest first.
-fn lanes(mut m: M) -> impl Iterator<Item = usize> {
-    std::iter::from_fn(move || {
-        (m != 0).then(|| {
-            let l = m.trailing_zeros() as usize;
-            m &= m - 1;
-            l
-        })
-    })
-}
