@@ -133,6 +133,7 @@ impl Scene {
     /// [`Scene::occluded_many`] with `K` rays in flight (`K` ≤ 1: one by one), for the tests
     /// and benchmarks.
     #[doc(hidden)]
+    #[inline(always)]
     pub fn occluded_many_k<const K: usize>(&self, rays: &[Ray], t_max: &[f32], out: &mut [bool]) {
         assert!(
             rays.len() == t_max.len() && rays.len() == out.len(),

@@ -135,7 +135,9 @@ pub(super) fn build<K: Kind>(
         std::ptr::copy_nonoverlapping(wide_top.as_ptr(), nodes.as_mut_ptr(), wide_top.len());
         nodes.set_len(len);
     }
-    nodes.shrink_to_fit();
+    // (No `shrink_to_fit`: the spare capacity was never written, so it holds no memory,
+    // while glibc may move a shrunk array into memory never advised as huge pages, where
+    // the traversal's node loads miss the TLB.)
     times.mark("subtrees");
     let root = if root_is_stub { roots[0] } else { 0 };
     (WideBvh::from_parts(nodes, root, bounds), order)
