@@ -84,9 +84,16 @@ pub fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
 
 /// ∫ over visible normals of the energy leaving through the interface (`transmit`) or
 /// reflected back (`!transmit`), seen from `wi` (wi.z > 0), by n×n Gauss–Legendre quadrature
-/// on the sampling square: E[G1(w', m)·(1 − F or F)].
-fn coating_integral(distr: &Microfacet, wi: Vec3A, eta: f32, n: usize, transmit: bool) -> f32 {
-    let (x, w) = gauss_legendre(n);
+/// on the sampling square (`rule`: [`gauss_legendre`]`(n)`): E[G1(w', m)·(1 − F or F)].
+fn coating_integral(
+    distr: &Microfacet,
+    wi: Vec3A,
+    eta: f32,
+    rule: &(Vec<f64>, Vec<f64>),
+    transmit: bool,
+) -> f32 {
+    let (x, w) = rule;
+    let n = x.len();
     let mut sum = 0.0f64;
     for a in 0..n {
         for b in 0..n {
@@ -115,17 +122,30 @@ fn coating_integral(distr: &Microfacet, wi: Vec3A, eta: f32, n: usize, transmit:
     sum as f32
 }
 
+/// The table's rows (one cos θ each) are independent integrals, computed in parallel at
+/// scene load (a few tens of milliseconds each table on one core) and summed in order, so
+/// the table is the same bits on any number of threads.
 fn compute_table(kind: MicrofacetType, alpha: f32, eta: f32) -> CoatingTable {
+    use rayon::prelude::*;
     let distr = Microfacet::new(kind, alpha, alpha);
+    let rule_t = gauss_legendre(if eta > 1.0 { 32 } else { 128 });
+    let rule_r = gauss_legendre(if 1.0 / eta > 1.0 { 32 } else { 128 });
+    let rows: Vec<(f32, f32)> = (0..TRANSMITTANCE_RES)
+        .into_par_iter()
+        .map(|k| {
+            let mu = (k as f32 / (TRANSMITTANCE_RES - 1) as f32).max(1e-6);
+            let wi = Vec3A::new((1.0 - mu * mu).sqrt(), 0.0, mu);
+            (
+                coating_integral(&distr, wi, eta, &rule_t, true),
+                coating_integral(&distr, wi, 1.0 / eta, &rule_r, false) * mu,
+            )
+        })
+        .collect();
     let mut transmittance = [0.0f32; TRANSMITTANCE_RES];
     let mut r_sum = 0.0f64;
-    let res_t = if eta > 1.0 { 32 } else { 128 };
-    let res_r = if 1.0 / eta > 1.0 { 32 } else { 128 };
-    for (k, t) in transmittance.iter_mut().enumerate() {
-        let mu = (k as f32 / (TRANSMITTANCE_RES - 1) as f32).max(1e-6);
-        let wi = Vec3A::new((1.0 - mu * mu).sqrt(), 0.0, mu);
-        *t = coating_integral(&distr, wi, eta, res_t, true);
-        r_sum += (coating_integral(&distr, wi, 1.0 / eta, res_r, false) * mu) as f64;
+    for (t, &(tk, rk)) in transmittance.iter_mut().zip(&rows) {
+        *t = tk;
+        r_sum += rk as f64;
     }
     CoatingTable {
         transmittance,
