@@ -105,8 +105,12 @@ fn one_by_one(s: &Scene, rays: &[Ray], out: &mut [Option<Interaction>]) {
     }
 }
 
-const VARIANTS: [(&str, Trace); 5] = [
+/// The ways to trace: one by one, `K` rays in flight (compiled for plain x86-64), and
+/// `auto`, what a render calls (`intersect_many`: x86-64-v3 where the CPU has it, and
+/// interleaved where the scene exceeds the level-2 cache).
+const VARIANTS: [(&str, Trace); 6] = [
     ("1", one_by_one),
+    ("auto", |s, r, o| s.intersect_many(r, o)),
     ("4", |s, r, o| s.intersect_many_k::<4>(r, o)),
     ("8", |s, r, o| s.intersect_many_k::<8>(r, o)),
     ("16", |s, r, o| s.intersect_many_k::<16>(r, o)),
@@ -236,8 +240,9 @@ fn occluded_one_by_one(s: &Scene, rays: &[Ray], t: &[f32], out: &mut [bool]) {
     }
 }
 
-const SHADOW_VARIANTS: [(&str, Occlusion); 5] = [
+const SHADOW_VARIANTS: [(&str, Occlusion); 6] = [
     ("1", occluded_one_by_one),
+    ("auto", |s, r, t, o| s.occluded_many(r, t, o)),
     ("4", |s, r, t, o| s.occluded_many_k::<4>(r, t, o)),
     ("8", |s, r, t, o| s.occluded_many_k::<8>(r, t, o)),
     ("16", |s, r, t, o| s.occluded_many_k::<16>(r, t, o)),

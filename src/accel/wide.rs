@@ -588,16 +588,22 @@ impl ArrayVec4 {
 const WIDEN: f32 = 1.0 + 2.0 * gamma(3);
 
 /// A ray prepared for 4-wide slab tests: the origin and inverse direction splatted, and per
-/// axis the index of the near slab in `Node4::bounds` (so no per-box min/max of the two slab
+/// axis the byte offset of the near slab in a `Node4` (so no per-box min/max of the two slab
 /// distances is needed).
 #[derive(Clone, Copy)]
 struct RayBoxes {
     o: [Vec4; 3],
     inv: [Vec4; 3],
-    /// `2·axis`, plus one where the ray runs towards −axis (the upper bound is then near);
-    /// and the far slab of each axis.
+    /// Slab `2·axis`, plus one where the ray runs towards −axis (the upper bound is then
+    /// near), and the far slab of each axis, as byte offsets: a traversal that keeps its ray
+    /// in memory ([`stream`]) reads each and adds it to the node's address, with no shift.
     near: [usize; 3],
     far: [usize; 3],
+}
+
+/// Byte offset of slab `i` in a `Node4`.
+const fn slab_offset(i: usize) -> usize {
+    i * std::mem::size_of::<Vec4>()
 }
 
 impl RayBoxes {
@@ -607,6 +613,7 @@ impl RayBoxes {
         // The sign of the reciprocal, not of the direction: −0.0 < 0.0 is false, yet its
         // reciprocal is −∞, so the far bound is the minimum.
         let neg = |v: f32| (v < 0.0) as usize;
+        let near = [neg(inv.x), 2 + neg(inv.y), 4 + neg(inv.z)].map(slab_offset);
         RayBoxes {
             o: [
                 Vec4::splat(ray.o.x),
@@ -614,8 +621,9 @@ impl RayBoxes {
                 Vec4::splat(ray.o.z),
             ],
             inv: [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)],
-            near: [neg(inv.x), 2 + neg(inv.y), 4 + neg(inv.z)],
-            far: [1 - neg(inv.x), 3 - neg(inv.y), 5 - neg(inv.z)],
+            near,
+            // The other slab of each axis: the index's lowest bit flipped.
+            far: near.map(|off| off ^ slab_offset(1)),
         }
     }
 
@@ -624,10 +632,11 @@ impl RayBoxes {
     /// (Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013).
     #[inline(always)]
     fn test(&self, n: &Node4, t_max: f32) -> (u32, Vec4) {
-        let slab = |i: usize| {
-            debug_assert!(i < 6);
-            // SAFETY: `near` and `far` hold indices below 6, set in `new`.
-            unsafe { *n.bounds.get_unchecked(i) }
+        let slab = |off: usize| {
+            debug_assert!(off < std::mem::size_of_val(&n.bounds) && off.is_multiple_of(16));
+            // SAFETY: `near` and `far` hold the offsets of slabs 0 to 5, set in `new`; a
+            // `Node4` and its `bounds` (its first field, `repr(C)`) are 16-byte aligned.
+            unsafe { *((n.bounds.as_ptr() as *const u8).add(off) as *const Vec4) }
         };
         let tn_x = (slab(self.near[0]) - self.o[0]) * self.inv[0];
         let tn_y = (slab(self.near[1]) - self.o[1]) * self.inv[1];

@@ -73,19 +73,34 @@ impl<E: Copy> Trav<E> {
     }
 }
 
-/// One step of a traversal, with `hit` the caller's primitive test.
+/// One step of a traversal of ray `k` with the caller's state `s` for it, with `hit(k, s,
+/// prim, t_max)` the caller's primitive test. (`k` and `s` are passed rather than captured
+/// by a closure around `hit`: such a closure was built in memory at every step, leaf or
+/// not, and kept the triangle test out of line; see docs/performance.md.)
 pub(crate) trait Step {
     /// What the primitive test answers.
     type Hit;
     /// One step; false when the traversal is over.
-    fn step<F: FnMut(usize, f32) -> Self::Hit>(&mut self, bvh: &WideBvh, hit: &mut F) -> bool;
+    fn step<S, F: FnMut(usize, &mut S, usize, f32) -> Self::Hit>(
+        &mut self,
+        bvh: &WideBvh,
+        k: usize,
+        s: &mut S,
+        hit: &mut F,
+    ) -> bool;
 }
 
 impl Step for Closest {
     type Hit = Option<f32>;
     /// One step of [`WideBvh::intersect`]'s traversal (`closest_step!`).
     #[inline(always)]
-    fn step<F: FnMut(usize, f32) -> Option<f32>>(&mut self, bvh: &WideBvh, hit: &mut F) -> bool {
+    fn step<S, F: FnMut(usize, &mut S, usize, f32) -> Option<f32>>(
+        &mut self,
+        bvh: &WideBvh,
+        k: usize,
+        s: &mut S,
+        hit: &mut F,
+    ) -> bool {
         closest_step!(
             bvh,
             self.r,
@@ -93,7 +108,7 @@ impl Step for Closest {
             self.cur,
             self.t_max,
             self.found,
-            hit,
+            |p, t| hit(k, s, p, t),
             { return true },
             { return false }
         )
@@ -106,14 +121,20 @@ impl Step for Any {
     // (The macro places `$next` and `$done` in tail position as well as in a loop's body.)
     #[allow(clippy::needless_return)]
     #[inline(always)]
-    fn step<F: FnMut(usize, f32) -> bool>(&mut self, bvh: &WideBvh, hit: &mut F) -> bool {
+    fn step<S, F: FnMut(usize, &mut S, usize, f32) -> bool>(
+        &mut self,
+        bvh: &WideBvh,
+        k: usize,
+        s: &mut S,
+        hit: &mut F,
+    ) -> bool {
         any_step!(
             bvh,
             self.r,
             self.stack,
             self.cur,
             self.t_max,
-            hit,
+            |p, t| hit(k, s, p, t),
             { return true },
             {
                 self.found = true;
@@ -237,14 +258,15 @@ impl WideBvh {
         let mut next = live;
         let mut i = 0;
         while live > 0 {
-            // SAFETY: the slots below `live` are started (above, or below when a ray ends).
-            let slot = unsafe { slots[i].assume_init_mut() };
-            let (k, s) = (slot.k, &mut slot.s);
-            if slot.c.step(self, &mut |p, t| hit(k, s, p, t)) {
+            debug_assert!(i < live && live <= K);
+            // SAFETY: `i` < `live` ≤ K, and the slots below `live` are started (above, or
+            // below when a ray ends).
+            let slot = unsafe { slots.get_unchecked_mut(i).assume_init_mut() };
+            if slot.c.step(self, slot.k, &mut slot.s, &mut hit) {
                 self.prefetch_step(slot.c.cur, &leaf);
                 i += 1;
             } else {
-                done(k, slot.c.found, &slot.s);
+                done(slot.k, slot.c.found, &slot.s);
                 if next < rays.len() {
                     let t = t_max(next);
                     Slot::start(&mut slots[i], self, &rays[next], t, next, init);
