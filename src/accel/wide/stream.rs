@@ -19,7 +19,8 @@
 //! compute.
 
 use super::{
-    child_key, child_of_key, sort4, ChildRef, Node4, RayBoxes, Stack, WideBvh, EMPTY, LEAF, WIDEN,
+    child_key, child_of_key, lowest, sort4, ChildRef, Node4, RayBoxes, Stack, WideBvh, EMPTY, LEAF,
+    WIDEN,
 };
 use crate::accel::prefetch;
 use crate::geometry::Ray;
@@ -109,6 +110,7 @@ impl Step for Closest {
             self.t_max,
             self.found,
             |p, t| hit(k, s, p, t),
+            true,
             { return true },
             { return false }
         )
@@ -135,6 +137,7 @@ impl Step for Any {
             self.cur,
             self.t_max,
             |p, t| hit(k, s, p, t),
+            true,
             { return true },
             {
                 self.found = true;
