@@ -103,8 +103,9 @@ macro_rules! closest_step {
     }};
 }
 
-/// The child slot of the lowest bit set in a box test's `mask`, or 0 where none is (a slot
-/// index either way: the callers read it only where the bit is set).
+/// The child slot of the lowest bit set in a box test's `mask`, or 0 where none is: a slot
+/// index either way, so that the branchless steps may read a child by it unconditionally
+/// (what they read for an empty mask goes unused).
 #[inline(always)]
 fn lowest(mask: u32) -> usize {
     (mask.trailing_zeros() & 3) as usize
