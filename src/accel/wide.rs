@@ -703,7 +703,7 @@ const STACK: usize = 3 * super::bvh::MAX_DEPTH;
 impl<T: Copy> Stack<T> {
     #[inline(always)]
     fn push(&mut self, v: T) {
-        push(&mut self.items, &mut self.len, v);
+        push_n(&mut self.items, &mut self.len, [v], 1);
     }
     #[inline(always)]
     fn push_if(&mut self, v: T, keep: bool) {
@@ -736,7 +736,7 @@ impl<'a, T: Copy> LocalStack<'a, T> {
     }
     #[inline(always)]
     fn push(&mut self, v: T) {
-        push(self.items, &mut self.len, v);
+        push_n(self.items, &mut self.len, [v], 1);
     }
     #[inline(always)]
     fn push_if(&mut self, v: T, keep: bool) {
@@ -750,13 +750,6 @@ impl<'a, T: Copy> LocalStack<'a, T> {
     fn pop(&mut self) -> Option<T> {
         pop(self.items, &mut self.len)
     }
-}
-
-/// Pushes `v` on the stack of `items` below `len`.
-#[inline(always)]
-fn push<T: Copy>(items: &mut Items<T>, len: &mut usize, v: T) {
-    items[*len] = std::mem::MaybeUninit::new(v);
-    *len += 1;
 }
 
 /// Pushes the first `n` of `v` (`n` ≤ N) on the stack of `items` below `len`, without a
