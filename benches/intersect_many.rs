@@ -1,11 +1,14 @@
 //! `Scene::intersect` one ray at a time against `Scene::intersect_many` with K rays in flight,
-//! on the rays a path tracer traces: the camera rays of a 64×64 image at 4 samples a pixel,
+//! on the rays a path tracer traces: the camera rays of a 64×64 image at 4 samples a pixel
+//! (`--res`, `--spp`; a pixel's samples consecutive, as the renderers trace them),
 //! then three bounces, each ray leaving its hit in a cosine-distributed direction about the
 //! shading normal (on the side it came from), in batches of the size the stream path tracer
 //! hands over; and `Scene::occluded` against `Scene::occluded_many` on a shadow ray from
-//! each hit.
+//! each hit. Also the camera rays as the renderers' packets of sixteen
+//! (`Scene::intersect_packet`).
 //!
 //! cargo bench --bench intersect_many -- [SCENE.xml ...] [--bunny N ...] [--batch N] [--rounds N]
+//!                                        [--res N] [--spp N] [--dump DIR]
 //!
 //! (`--bunny N`: the benchmarks' bunny with each triangle split into N², 3 674·N² triangles.)
 //!
@@ -15,18 +18,20 @@
 //! shared), with the spread (max/min) beside it. Every batch's answers are checked equal to
 //! the one-at-a-time ones, bit for bit, before anything is timed. `--only VARIANT` traces
 //! with that variant only, once (`valgrind --tool=callgrind
-//! --toggle-collect='*intersect_many::time*'`).
+//! --toggle-collect='*intersect_many::time*'`). `--dump DIR` also writes each scene's rays to
+//! `DIR/STEM-{camera,bounces,shadow}.f32` (seven little-endian `f32` a ray: origin,
+//! direction, end distance), for `bench/embree_rays.py`, which times Mitsuba 3's Embree on the
+//! same rays.
 
 mod common;
 
 use glam::{Vec2, Vec3A};
+use mcrt::accel::{RayPacket, PACKET};
 use mcrt::geometry::Ray;
 use mcrt::scene::{Interaction, Scene};
 use std::path::Path;
 use std::time::Instant;
 
-const RES: u32 = 64;
-const SPP: u32 = 4;
 const BOUNCES: usize = 3;
 
 /// A 64-bit hash (SplitMix64's finaliser) as a number in [0, 1).
@@ -40,15 +45,15 @@ fn unit(seed: u64) -> f32 {
 /// The rays of each depth: the camera's, then each bounce's; and shadow rays with their
 /// distances, one from each hit towards a point drawn uniformly in the scene's bounds (as
 /// a light sample's, the segment's end not reached: 1 − 10⁻⁴).
-fn path_rays(scene: &Scene) -> (Vec<Vec<Ray>>, Vec<Ray>, Vec<f32>) {
-    let cam = scene.camera(None).expect("a camera").build(RES, RES);
+fn path_rays(scene: &Scene, res: u32, spp: u32) -> (Vec<Vec<Ray>>, Vec<Ray>, Vec<f32>) {
+    let cam = scene.camera(None).expect("a camera").build(res, res);
     let mut levels = vec![Vec::new()];
     let (mut shadow, mut shadow_t) = (Vec::new(), Vec::new());
     let bb = scene.bounds().expect("a scene with something in it");
-    for y in 0..RES {
-        for x in 0..RES {
-            for s in 0..SPP {
-                let id = (((y * RES + x) * SPP + s) as u64) << 8;
+    for y in 0..res {
+        for x in 0..res {
+            for s in 0..spp {
+                let id = (((y * res + x) * spp + s) as u64) << 8;
                 levels[0].push(cam.generate_ray(x, y, Vec2::new(unit(id), unit(id + 1))));
             }
         }
@@ -97,6 +102,35 @@ fn bits(h: &Option<Interaction>) -> Option<Vec<u32>> {
     })
 }
 
+/// Rays as seven little-endian `f32` each: origin, direction, end distance.
+fn write_rays(path: &Path, rays: &[Ray], t_max: &[f32]) {
+    let mut bytes = Vec::with_capacity(rays.len() * 28);
+    for (r, t) in rays.iter().zip(t_max) {
+        for v in r.o.to_array().into_iter().chain(r.d.to_array()).chain([*t]) {
+            bytes.extend(v.to_le_bytes());
+        }
+    }
+    std::fs::write(path, bytes).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+}
+
+/// Rays that share their origin, sixteen at a time through `Scene::intersect_packet`.
+fn packets(s: &Scene, rays: &[Ray], out: &mut [Option<Interaction>]) {
+    for (rs, os) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
+        let mut pk = RayPacket {
+            o: rs[0].o,
+            d: [[0.0; PACKET]; 3],
+            t_max: [f32::INFINITY; PACKET],
+        };
+        for (l, r) in rs.iter().enumerate() {
+            assert_eq!(r.o, pk.o, "packets need rays from one origin");
+            (pk.d[0][l], pk.d[1][l], pk.d[2][l]) = (r.d.x, r.d.y, r.d.z);
+        }
+        let mut hits = [None; PACKET];
+        s.intersect_packet(&pk, (1u32 << rs.len()) - 1, &mut hits);
+        os.clone_from_slice(&hits[..rs.len()]);
+    }
+}
+
 type Trace = fn(&Scene, &[Ray], &mut [Option<Interaction>]);
 
 fn one_by_one(s: &Scene, rays: &[Ray], out: &mut [Option<Interaction>]) {
@@ -138,8 +172,10 @@ fn time(
 fn main() {
     let mut scenes = Vec::new();
     let (mut batch, mut rounds) = (256usize, 7usize);
+    let (mut res, mut spp) = (64u32, 4u32);
     // `--only NAME`: that variant once, no checks (for `valgrind --tool=callgrind`).
     let mut only = None;
+    let mut dump = None;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
@@ -150,7 +186,10 @@ fn main() {
                     .and_then(|v| v.parse().ok())
                     .expect("--rounds N")
             }
+            "--res" => res = args.next().and_then(|v| v.parse().ok()).expect("--res N"),
+            "--spp" => spp = args.next().and_then(|v| v.parse().ok()).expect("--spp N"),
             "--only" => only = Some(args.next().expect("--only VARIANT")),
+            "--dump" => dump = Some(args.next().expect("--dump DIR")),
             "--bunny" => scenes.push(format!("bunny:{}", args.next().expect("--bunny N"))),
             "--bench" => {}
             _ => scenes.push(a),
@@ -172,11 +211,24 @@ fn main() {
                 .unwrap_or_else(|e| panic!("{path}: {e} (run python3 bench/make_scenes.py)")),
         };
         let scene = Scene::build(desc);
-        let (levels, shadow, shadow_t) = path_rays(&scene);
+        let (levels, shadow, shadow_t) = path_rays(&scene, res, spp);
         let sets = [
             ("camera", levels[0].clone()),
             ("bounces", levels[1..].concat()),
         ];
+        if let Some(dir) = &dump {
+            let stem = Path::new(path)
+                .file_stem()
+                .map_or("bunny".into(), |s| s.to_string_lossy());
+            let infinite = |rays: &[Ray]| vec![f32::INFINITY; rays.len()];
+            for (name, rays, t) in [
+                ("camera", &sets[0].1, infinite(&sets[0].1)),
+                ("bounces", &sets[1].1, infinite(&sets[1].1)),
+                ("shadow", &shadow, shadow_t.clone()),
+            ] {
+                write_rays(&Path::new(dir).join(format!("{stem}-{name}.f32")), rays, &t);
+            }
+        }
         println!(
             "{path}: {} triangles, {:.1} MB, streams: {}, batches of {batch}, {rounds} rounds",
             scene.triangle_count(),
@@ -218,7 +270,19 @@ fn main() {
                     worst[v] = worst[v].max(t);
                 }
             }
-            println!("  {name}: {} rays", rays.len());
+            let hits = want.iter().filter(|h| h.is_some()).count();
+            println!("  {name}: {} rays ({hits} hit)", rays.len());
+            if *name == "camera" {
+                // A pinhole camera's rays share their origin: the render traces them in
+                // packets of sixteen consecutive samples.
+                packets(&scene, rays, &mut out);
+                let got: Vec<_> = out.iter().map(bits).collect();
+                assert!(got == want, "packets: answers differ from one by one");
+                let t = (0..rounds)
+                    .map(|_| time(&scene, rays, PACKET, packets, &mut out))
+                    .fold(f64::INFINITY, f64::min);
+                println!("    packets: {:7.1} ns/ray", t * 1e9 / rays.len() as f64);
+            }
             for (v, (vname, _)) in VARIANTS.iter().enumerate() {
                 println!(
                     "    K = {vname:>2}: {:7.1} ns/ray (spread {:.2}), one by one / this {:.3}",

@@ -1,0 +1,75 @@
+#!/usr/bin/env python3
+"""Time Mitsuba 3's ray queries (Embree, through `llvm_ad_rgb`) on the rays that
+`cargo bench --bench intersect_many -- SCENE.xml --dump DIR` traced, to compare the two
+renderers' traversal on the same rays, one thread each.
+
+usage: .venv/bin/python bench/embree_rays.py SCENE.xml DIR [--rounds N] [--threads N] [--shuffle]
+
+For each of DIR/STEM-{camera,bounces,shadow}.f32 (seven little-endian f32 a ray: origin,
+direction, end distance) it prints ns a ray for `ray_intersect_preliminary` (Embree's closest
+hit alone), `ray_intersect` (with the surface interaction) and `ray_test` (occlusion), the
+minimum over the rounds, each evaluated (Dr.Jit is lazy) after an untimed warm-up that compiles
+its kernel; and how many rays hit, to check that both renderers saw the same scene.
+"""
+import argparse
+import glob
+import os
+import time
+
+for _llvm in sorted(glob.glob("/usr/lib/*/libLLVM.so.19*"))[:1]:
+    os.environ.setdefault("DRJIT_LIBLLVM_PATH", _llvm)
+
+import numpy as np  # noqa: E402
+import mitsuba as mi  # noqa: E402
+import drjit as dr  # noqa: E402
+
+
+def timed(f, rounds):
+    """Minimum seconds of `f()` evaluated, over `rounds` runs after one warm-up."""
+    dr.eval(f())
+    dr.sync_thread()
+    best = float("inf")
+    for _ in range(rounds):
+        t = time.perf_counter()
+        out = f()
+        dr.eval(out)
+        dr.sync_thread()
+        best = min(best, time.perf_counter() - t)
+    return best, out
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("scene")
+    ap.add_argument("dir")
+    ap.add_argument("--rounds", type=int, default=5)
+    ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--shuffle", action="store_true",
+                    help="trace the rays in a random order (fixed seed), not as written")
+    a = ap.parse_args()
+    mi.set_variant("llvm_ad_rgb")
+    dr.set_thread_count(a.threads)
+    scene = mi.load_file(os.path.abspath(a.scene))
+    stem = os.path.splitext(os.path.basename(a.scene))[0]
+    for name in ("camera", "bounces", "shadow"):
+        raw = np.fromfile(os.path.join(a.dir, f"{stem}-{name}.f32"), dtype="<f4").reshape(-1, 7)
+        if a.shuffle:
+            raw = raw[np.random.default_rng(1).permutation(len(raw))]
+        n = len(raw)
+        o = mi.Point3f(*(mi.Float(np.ascontiguousarray(raw[:, i])) for i in range(3)))
+        d = mi.Vector3f(*(mi.Float(np.ascontiguousarray(raw[:, 3 + i])) for i in range(3)))
+        ray = mi.Ray3f(o, d, mi.Float(np.ascontiguousarray(raw[:, 6])), 0.0, [])
+        dr.eval(ray)
+        if name == "shadow":
+            t, hit = timed(lambda: scene.ray_test(ray), a.rounds)
+            print(f"{name}: {n} rays ({int(dr.count(hit)[0])} blocked), ray_test {t * 1e9 / n:.1f} ns/ray")
+            continue
+        tp, pi = timed(lambda: scene.ray_intersect_preliminary(ray).t, a.rounds)
+        ts, _ = timed(lambda: scene.ray_intersect(ray, mi.RayFlags.All, False).p, a.rounds)
+        hits = int(dr.count(dr.isfinite(pi))[0])
+        print(f"{name}: {n} rays ({hits} hit), ray_intersect_preliminary {tp * 1e9 / n:.1f} "
+              f"ns/ray, ray_intersect {ts * 1e9 / n:.1f} ns/ray")
+
+
+if __name__ == "__main__":
+    main()
