@@ -5,7 +5,9 @@
 //! shading normal (on the side it came from), in batches of the size the stream path tracer
 //! hands over; and `Scene::occluded` against `Scene::occluded_many` on a shadow ray from
 //! each hit. Also the camera rays as the renderers' packets of sixteen
-//! (`Scene::intersect_packet`).
+//! (`Scene::intersect_packet`), and shadow rays from the camera rays' hits towards one small
+//! region, eight in flight against sixteen consecutive ones a packet of their own origins
+//! (`Scene::occluded_origins`, as the renderers trace those of paths' first vertices).
 //!
 //! cargo bench --bench intersect_many -- [SCENE.xml ...] [--bunny N ...] [--batch N] [--rounds N]
 //!                                        [--res N] [--spp N] [--dump DIR]
@@ -293,6 +295,9 @@ fn main() {
             }
         }
         shadows(&scene, &shadow, &shadow_t, batch, rounds, only.as_deref());
+        if only.is_none() {
+            first_vertex_shadows(&scene, &levels[0], rounds);
+        }
     }
 }
 
@@ -382,4 +387,54 @@ fn shadows(
             best[0] / best[v],
         );
     }
+}
+
+/// Shadow rays as next-event estimation sends them from the first vertices of a pixel's
+/// samples: from the camera rays' hits towards a small region at the top of the scene (a
+/// light), sixteen consecutive rays (a pixel's samples at `--spp 16`) as one packet of rays
+/// of their own origins (`Scene::occluded_origins`) against the same rays eight in flight.
+fn first_vertex_shadows(scene: &Scene, camera: &[Ray], rounds: usize) {
+    let bb = scene.bounds().expect("a scene with something in it");
+    let target = bb.min + (bb.max - bb.min) * Vec3A::new(0.5, 0.9, 0.5);
+    let r = (bb.max - bb.min).length() * 0.02;
+    let mut rays = Vec::new();
+    for (k, ray) in camera.iter().enumerate() {
+        if let Some(si) = scene.intersect(ray) {
+            let j = Vec3A::new(
+                unit(k as u64 * 3 + 7),
+                unit(k as u64 * 3 + 8),
+                unit(k as u64 * 3 + 9),
+            );
+            rays.push(si.spawn_ray(target + (j - 0.5) * r - si.p));
+        }
+    }
+    let t = vec![1.0 - 1e-4; rays.len()];
+    let mut want = vec![false; rays.len()];
+    occluded_one_by_one(scene, &rays, &t, &mut want);
+    let mut got = vec![false; rays.len()];
+    let packets = |got: &mut [bool]| {
+        let start = Instant::now();
+        scene.occluded_origins(&rays, &t, got);
+        start.elapsed().as_secs_f64()
+    };
+    packets(&mut got);
+    assert!(
+        got == want,
+        "own-origin packets: answers differ from one by one"
+    );
+    let tp = (0..rounds)
+        .map(|_| packets(&mut got))
+        .fold(f64::INFINITY, f64::min);
+    let many = |s: &Scene, r: &[Ray], t: &[f32], o: &mut [bool]| s.occluded_many(r, t, o);
+    let ti = (0..rounds)
+        .map(|_| time_shadows(scene, &rays, &t, 256, many))
+        .fold(f64::INFINITY, f64::min);
+    let blocked = want.iter().filter(|&&b| b).count();
+    println!(
+        "  first-vertex shadow rays: {} rays ({blocked} blocked), occluded_many {:.1} ns/ray, \
+         packets of own origins {:.1} ns/ray",
+        rays.len(),
+        ti * 1e9 / rays.len() as f64,
+        tp * 1e9 / rays.len() as f64
+    );
 }

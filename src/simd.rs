@@ -18,6 +18,12 @@ use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 /// lane vector's active lanes.
 #[inline(always)]
 pub fn lanes_of(mask: u32) -> impl Iterator<Item = usize> {
+    lanes_of64(mask.into())
+}
+
+/// [`lanes_of`] for a mask of up to 64 lanes.
+#[inline(always)]
+pub fn lanes_of64(mask: u64) -> impl Iterator<Item = usize> {
     let mut m = mask;
     std::iter::from_fn(move || {
         (m != 0).then(|| {

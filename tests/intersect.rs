@@ -1043,6 +1043,65 @@ fn shadow_packets_match_single_rays() {
     assert!(occluded > lanes / 10 && occluded < lanes * 9 / 10);
 }
 
+/// Shadow rays each from its own origin, traced sixteen to a packet
+/// (`Scene::occluded_origins`; box tests sixteen, eight or one lane at a time) give each
+/// ray exactly the answer of its own traversal and of brute force: origins near one another
+/// (a pixel's first vertices) or spread over the cloud, targets in a small or a large
+/// region, axis-parallel directions and −0.0 components among them, random `t_max` per ray,
+/// batches of 1 to 40 rays (full and partial packets).
+#[test]
+fn shadow_rays_of_own_origins_match_single_rays() {
+    use mcrt::accel::PACKET;
+    let mut rng = Rng::new(9);
+    let soup = Soup::new(&mut rng, 3000, 40);
+    let (mut occluded, mut total) = (0, 0);
+    for i in 0..2000 {
+        let centre = rng.ball() * 12.0;
+        let spread = [0.01, 0.3, 10.0][i % 3];
+        let (c, r) = (rng.ball() * 10.0, if i % 4 == 0 { 8.0 } else { 0.5 });
+        // Up to two and a half packets.
+        let n = 1 + i % (5 * PACKET / 2);
+        let mut rays = Vec::new();
+        let mut t_max = Vec::new();
+        for k in 0..n {
+            let o = centre + rng.ball() * spread;
+            let mut d = (c + rng.ball() * r - o).to_array();
+            match (i + k) % 11 {
+                0 => d[k % 3] = 0.0,
+                1 => d[k % 3] = -0.0,
+                2 => {
+                    d = [0.0; 3];
+                    d[k % 3] = if rng.f() < 0.5 { 1.0 } else { -1.0 };
+                }
+                _ => {}
+            }
+            rays.push(Ray::new(o, Vec3A::from_array(d)));
+            t_max.push(if rng.f() < 0.5 {
+                1.0 - 1e-4
+            } else {
+                rng.range(0.0, 3.0)
+            });
+        }
+        let mut got = vec![false; n];
+        soup.scene.occluded_origins(&rays, &t_max, &mut got);
+        for lanes in [1, 8] {
+            let mut other = vec![false; n];
+            soup.scene
+                .occluded_origins_with(&rays, &t_max, lanes, &mut other);
+            assert_eq!(other, got, "batch {i}: {lanes} lanes and 16 differ");
+        }
+        for (k, (ray, &t)) in rays.iter().zip(&t_max).enumerate() {
+            let single = soup.scene.occluded(ray, t);
+            assert_eq!(got[k], single, "batch {i} ray {k}: {ray:?}, t_max {t}");
+            assert_eq!(single, soup.brute(ray, t).is_some(), "batch {i} ray {k}");
+            occluded += single as u32;
+            total += 1;
+        }
+    }
+    eprintln!("own origins: {occluded} of {total} rays occluded");
+    assert!(occluded > total / 10 && occluded < total * 9 / 10);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Brute force for small scenes against the BVH
 // ---------------------------------------------------------------------------------------------

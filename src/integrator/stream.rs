@@ -19,8 +19,11 @@
 //! samples, which share a pinhole camera's eye, into packets that traverse the tree once for
 //! up to sixteen rays (`Scene::intersect_packet`). With one light sample a vertex (the
 //! default), the step hands back its shadow ray, and a round's shadow rays are traced
-//! together too ([`Scene::occluded_many`]) before the paths that ended add their values;
-//! with several, they stay inside the step (traced as one packet a vertex, [`super::nee`]).
+//! together too ([`Scene::occluded_many`]) before the paths that ended add their values,
+//! those from the first vertices of consecutive samples (nearby points, towards the lights)
+//! as packets of their own origins ([`Scene::occluded_origins`]); with several light
+//! samples a vertex, they stay inside the step (traced as one packet a vertex,
+//! [`super::nee`]).
 
 use super::path::{PathState, Shadow};
 use crate::accel::{RayPacket, PACKET};
@@ -43,7 +46,7 @@ struct Slot {
     path: PathState,
     sampler: Sampler,
     k: usize,
-    /// Whether the path's ray is its camera ray (not yet traced).
+    /// Whether the path's ray is its camera ray (until the path's step at its hit).
     fresh: bool,
 }
 
@@ -139,8 +142,9 @@ fn render_tile_portable(
                 slot.path
                     .step(scene, hit.as_ref(), &mut slot.sampler, p, &mut stats.rays);
             *ended = !alive;
+            let first = std::mem::take(&mut slot.fresh);
             if let Some(s) = shadow {
-                shadows.push(j, s);
+                shadows.push(j, s, first);
             }
         }
         shadows.trace(scene, &mut pool);
@@ -184,7 +188,7 @@ impl Rays {
         let mut packet = Packet::default();
         for (j, slot) in pool.iter_mut().enumerate() {
             let ray = slot.path.ray;
-            if !std::mem::take(&mut slot.fresh) {
+            if !slot.fresh {
                 self.rays.push(ray);
                 self.slots.push(j);
                 continue;
@@ -257,20 +261,30 @@ impl Packet {
     }
 }
 
-/// The shadow rays of a round's steps, by slot, traced together.
+/// A round's shadow rays: those from paths' first vertices apart (`first`), the others in
+/// `rest`.
 #[derive(Default)]
 struct Shadows {
+    first: ShadowRays,
+    rest: ShadowRays,
+}
+
+/// Shadow rays, their slots, and the answers.
+#[derive(Default)]
+struct ShadowRays {
     slots: Vec<(usize, Shadow)>,
     rays: Vec<Ray>,
     t_max: Vec<f32>,
     occluded: Vec<bool>,
 }
 
-impl Shadows {
+impl ShadowRays {
     fn clear(&mut self) {
         self.slots.clear();
         self.rays.clear();
         self.t_max.clear();
+        self.occluded.clear();
+        self.occluded.resize(POOL, false);
     }
 
     #[inline(always)]
@@ -280,15 +294,46 @@ impl Shadows {
         self.slots.push((slot, s));
     }
 
-    /// Traces the rays ([`Scene::occluded_many`]) and gives each its slot's path.
+    /// Gives each ray's answer to its slot's path.
     #[inline(always)]
-    fn trace(&mut self, scene: &Scene, pool: &mut [Slot]) {
-        self.occluded.clear();
-        self.occluded.resize(self.rays.len(), false);
-        scene.occluded_many(&self.rays, &self.t_max, &mut self.occluded);
+    fn give(&self, pool: &mut [Slot]) {
         for ((j, s), &occluded) in self.slots.iter().zip(&self.occluded) {
             pool[*j].path.light(s, occluded);
         }
+    }
+}
+
+impl Shadows {
+    fn clear(&mut self) {
+        self.first.clear();
+        self.rest.clear();
+    }
+
+    /// A shadow ray of slot `slot`'s path, from its first vertex where `first`. (One to a
+    /// light at infinity, whose directions are spread over the sphere, goes with the
+    /// others.)
+    #[inline(always)]
+    fn push(&mut self, slot: usize, s: Shadow, first: bool) {
+        match first && s.t_max.is_finite() {
+            true => self.first.push(slot, s),
+            false => self.rest.push(slot, s),
+        }
+    }
+
+    /// Traces the rays and gives each its slot's path: those from first vertices, which
+    /// consecutive slots' fresh paths left (consecutive samples of a pixel, from nearly
+    /// one point towards the lights), sixteen to a packet ([`Scene::occluded_origins`]);
+    /// the others together ([`Scene::occluded_many`]).
+    #[inline(always)]
+    fn trace(&mut self, scene: &Scene, pool: &mut [Slot]) {
+        let f = &mut self.first;
+        let n = f.rays.len();
+        scene.occluded_origins(&f.rays, &f.t_max, &mut f.occluded[..n]);
+        let r = &mut self.rest;
+        let n = r.rays.len();
+        scene.occluded_many(&r.rays, &r.t_max, &mut r.occluded[..n]);
+        self.first.give(pool);
+        self.rest.give(pool);
     }
 }
 

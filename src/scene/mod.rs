@@ -522,6 +522,74 @@ impl Scene {
         }
     }
 
+    /// Occlusion of rays that start near one another and head the same way, as the shadow
+    /// rays of a pixel's samples from their first vertices do: `out[k]` is
+    /// [`Scene::occluded`]`(&rays[k], t_max[k])`, sixteen consecutive rays traced as one
+    /// packet of their own origins (`WideBvh::occluded_origins`). Panics if the slices'
+    /// lengths differ.
+    pub fn occluded_origins(&self, rays: &[Ray], t_max: &[f32], out: &mut [bool]) {
+        self.occluded_origins_with(rays, t_max, PACKET, out);
+    }
+
+    /// [`Scene::occluded_origins`] with its box tests `lanes` (1, 8 or 16) rays at a time
+    /// where the CPU allows: the same answers each way, which the tests check by choosing.
+    pub fn occluded_origins_with(
+        &self,
+        rays: &[Ray],
+        t_max: &[f32],
+        lanes: usize,
+        out: &mut [bool],
+    ) {
+        assert!(rays.len() == t_max.len() && rays.len() == out.len());
+        let packets = rays.chunks(PACKET).zip(t_max.chunks(PACKET));
+        for ((rays, t_max), out) in packets.zip(out.chunks_mut(PACKET)) {
+            let hits = self.occluded_packet_of_origins(rays, t_max, lanes);
+            for (l, o) in out.iter_mut().enumerate() {
+                *o = hits >> l & 1 != 0;
+            }
+        }
+    }
+
+    /// Bit k set where `rays[k]` (at most [`PACKET`] of them) is blocked before `t_max[k]`.
+    #[inline(always)]
+    fn occluded_packet_of_origins(&self, rays: &[Ray], t_max: &[f32], lanes: usize) -> u32 {
+        let all = (1u32 << rays.len()) - 1;
+        let hits = if self.is_flat() {
+            // Brute force takes its rays one by one (as `intersect_packet_with`).
+            (0..rays.len()).fold(0, |m, k| {
+                m | (self.occluded_prims(&rays[k], t_max[k]) as u32) << k
+            })
+        } else {
+            let mut o = [[0.0; PACKET]; 3];
+            let mut pk = RayPacket {
+                o: Vec3A::ZERO,
+                d: [[0.0; PACKET]; 3],
+                t_max: [0.0; PACKET],
+            };
+            for (k, r) in rays.iter().enumerate() {
+                (o[0][k], o[1][k], o[2][k]) = (r.o.x, r.o.y, r.o.z);
+                (pk.d[0][k], pk.d[1][k], pk.d[2][k]) = (r.d.x, r.d.y, r.d.z);
+                pk.t_max[k] = t_max[k];
+            }
+            self.bvh.occluded_origins(&o, &pk, all, lanes, |i, m| {
+                crate::simd::lanes_of(m).fold(0, |hits, k| {
+                    let (ray, t) = (&rays[k], t_max[k]);
+                    let blocks = match self.hit(ray, i, t) {
+                        Some((t, u, v)) => !self.masked || self.seen(ray, i, u, v, t),
+                        None => false,
+                    };
+                    hits | (blocks as u32) << k
+                })
+            })
+        };
+        match &self.instances {
+            Some(inst) if hits != all => crate::simd::lanes_of(all & !hits).fold(hits, |m, k| {
+                m | (inst.occluded(&rays[k], t_max[k]) as u32) << k
+            }),
+            _ => hits,
+        }
+    }
+
     /// The lanes of `lanes` whose rays primitive `i` blocks.
     #[inline(always)]
     fn packet_hits(&self, pk: &RayPacket, i: usize, lanes: u32) -> u32 {

@@ -1,6 +1,8 @@
 //! Up to sixteen rays from one origin in one traversal of the 4-wide BVH: occlusion of a
 //! vertex's shadow rays ([`WideBvh::occluded_packet`]) and the closest hits of a pinhole
-//! camera's rays ([`WideBvh::closest_packet`]).
+//! camera's rays ([`WideBvh::closest_packet`]); and occlusion of sixteen rays of their own
+//! origins, the shadow rays of a pixel's samples from their first vertices
+//! (`WideBvh::occluded_origins`).
 //!
 //! Next-event estimation sends its shadow rays from one shading point to nearby points on
 //! the lights, and a pixel's camera samples leave the eye in nearly one direction, so such
@@ -91,9 +93,43 @@ impl WideBvh {
         #[cfg(target_arch = "x86_64")]
         if let Some(wide) = avx::width(lanes) {
             // SAFETY: `avx::width` checked the CPU's AVX, and AVX-512 where `wide`.
-            return unsafe { avx::run(self, pk, active, wide, &mut avx::Occlusion(&mut hit)) };
+            let w = &mut avx::Occlusion(&mut hit);
+            return unsafe { avx::run(self, pk, None, active, wide, w) };
         }
         self.occluded_each(pk, active, hit)
+    }
+
+    /// [`Self::occluded_packet_with`] for rays of their own origins (`o`, by axis then lane;
+    /// `pk.o` is not read), as the shadow rays of a pixel's samples from their first
+    /// vertices are: nearby origins, directions to the lights. Each box test subtracts each
+    /// lane's origin, as its ray's own test does, so the answers are again each ray's on its
+    /// own; no interval of directions culls the children first.
+    #[inline]
+    pub(crate) fn occluded_origins<F: FnMut(usize, u32) -> u32>(
+        &self,
+        o: &[[f32; PACKET]; 3],
+        pk: &RayPacket,
+        active: u32,
+        lanes: usize,
+        mut hit: F,
+    ) -> u32 {
+        debug_assert!(active < 1 << PACKET && matches!(lanes, 1 | 8 | PACKET));
+        if self.root == EMPTY || active == 0 {
+            return 0;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if let Some(wide) = avx::width(lanes) {
+            let w = &mut avx::Occlusion(&mut hit);
+            // SAFETY: `avx::width` checked the CPU's AVX, and AVX-512 where `wide`.
+            return unsafe { avx::run(self, pk, Some(o), active, wide, w) };
+        }
+        let mut pk = *pk;
+        let mut occ = 0;
+        for lane in crate::simd::lanes_of(active) {
+            pk.o = Vec3A::new(o[0][lane], o[1][lane], o[2][lane]);
+            occ |= self.occluded_each(&pk, 1 << lane, &mut hit);
+        }
+        occ
     }
 
     /// The same answers, each ray by the single-ray traversal: the fallback without AVX.
@@ -150,7 +186,7 @@ impl WideBvh {
                 t_max: pk.t_max,
             };
             // SAFETY: `avx::width` checked the CPU's AVX, and AVX-512 where `wide`.
-            return unsafe { avx::run(self, pk, active, wide, &mut walk) };
+            return unsafe { avx::run(self, pk, None, active, wide, &mut walk) };
         }
         self.closest_each(pk, active, hit)
     }
@@ -188,14 +224,19 @@ mod avx {
         /// 1/d as `Vec3A::recip` computes it (a division, not an approximation).
         inv: [[__m256; HALVES]; 3],
         t_max: [__m256; HALVES],
-        /// The origin, splatted for the four children of a node.
+        /// The origin, splatted for the four children of a node (zero where each lane has
+        /// its own).
         o: [__m128; 3],
+        /// Each lane's origin (packets of kind `ORIGINS` only).
+        lane_o: [[__m256; HALVES]; 3],
     }
 
-    /// The sixteen lanes' reciprocal directions and `t_max` in AVX-512 registers.
+    /// The sixteen lanes' reciprocal directions, `t_max` and origins (kind `ORIGINS` only)
+    /// in AVX-512 registers.
     pub(super) struct Lanes16 {
         inv: [__m512; 3],
         t_max: __m512,
+        lane_o: [__m512; 3],
     }
 
     impl Lanes {
@@ -243,11 +284,13 @@ mod avx {
     }
 
     /// Runs `w` for the lanes of `active` of `pk`, sixteen lanes at a time where `wide`
-    /// (the CPU has AVX-512), else eight.
+    /// (the CPU has AVX-512), else eight; with `origins`, each lane from its own origin
+    /// (`pk.o` unread).
     #[target_feature(enable = "avx")]
     pub(super) unsafe fn run<W: Walk>(
         bvh: &WideBvh,
         pk: &RayPacket,
+        origins: Option<&[[f32; PACKET]; 3]>,
         active: u32,
         wide: bool,
         w: &mut W,
@@ -256,15 +299,28 @@ mod avx {
             std::array::from_fn(|h| _mm256_loadu_ps(a[8 * h..].as_ptr()))
         };
         let one = _mm256_set1_ps(1.0);
+        let zero = [[_mm256_setzero_ps(); HALVES]; 3];
         let mut lanes = Lanes {
             inv: pk.d.map(|d| load(&d).map(|v| _mm256_div_ps(one, v))),
             t_max: load(&pk.t_max),
-            o: [pk.o.x, pk.o.y, pk.o.z].map(|x| _mm_set1_ps(x)),
+            // `slab − 0` is `slab`, bit for bit: the lanes subtract their own origins.
+            o: match origins {
+                Some(_) => [_mm_setzero_ps(); 3],
+                None => [pk.o.x, pk.o.y, pk.o.z].map(|x| _mm_set1_ps(x)),
+            },
+            lane_o: origins.map_or(zero, |o| o.map(|a| load(&a))),
         };
-        let c = Coherent::new(&lanes, active);
+        // (Rays of their own origins are not culled by intervals first: with the origins'
+        // interval too, that culling cost more than it saved on the shadow rays of a
+        // pixel's first vertices.)
+        let c = match origins {
+            Some(_) => None,
+            None => Coherent::new(&lanes, active),
+        };
         let kind = match &c {
             Some(c) if c.one_sign => COHERENT,
             Some(_) => FINITE,
+            None if origins.is_some() => ORIGINS,
             None => ANY,
         };
         let c = c.unwrap_or_else(Coherent::none);
@@ -272,10 +328,12 @@ mod avx {
         match (kind, wide) {
             (COHERENT, false) => run8::<COHERENT, W>(bvh, l, &c, active, w),
             (FINITE, false) => run8::<FINITE, W>(bvh, l, &c, active, w),
+            (ORIGINS, false) => run8::<ORIGINS, W>(bvh, l, &c, active, w),
             (_, false) => run8::<ANY, W>(bvh, l, &c, active, w),
-            (COHERENT, true) => run16::<COHERENT, W>(bvh, l, pk, &c, active, w),
-            (FINITE, true) => run16::<FINITE, W>(bvh, l, pk, &c, active, w),
-            (_, true) => run16::<ANY, W>(bvh, l, pk, &c, active, w),
+            (COHERENT, true) => run16::<COHERENT, W>(bvh, l, pk, origins, &c, active, w),
+            (FINITE, true) => run16::<FINITE, W>(bvh, l, pk, origins, &c, active, w),
+            (ORIGINS, true) => run16::<ORIGINS, W>(bvh, l, pk, origins, &c, active, w),
+            (_, true) => run16::<ANY, W>(bvh, l, pk, origins, &c, active, w),
         }
     }
 
@@ -297,6 +355,7 @@ mod avx {
         bvh: &WideBvh,
         l: &mut Lanes,
         pk: &RayPacket,
+        origins: Option<&[[f32; PACKET]; 3]>,
         coh: &Coherent,
         active: u32,
         w: &mut W,
@@ -308,6 +367,10 @@ mod avx {
                 .d
                 .map(|d| _mm512_div_ps(one, _mm512_loadu_ps(d.as_ptr()))),
             t_max: _mm512_loadu_ps(pk.t_max.as_ptr()),
+            lane_o: match origins {
+                Some(o) => o.map(|a| _mm512_loadu_ps(a.as_ptr())),
+                None => [_mm512_setzero_ps(); 3],
+            },
         };
         w.walk::<KIND, true>(bvh, l, Some(&mut l16), coh, active)
     }
@@ -505,7 +568,8 @@ mod avx {
     /// and the children that some lane may enter, and that every active lane enters. A
     /// coherent packet needs only each axis's near and far slab (the same for all its lanes)
     /// and first culls the children no lane enters; any other needs both slabs, and a packet
-    /// of finite directions culls with both.
+    /// of finite directions culls with both. (Rays of their own origins get the slabs
+    /// themselves, `l.o` being zero, and `enter` subtracts each lane's origin.)
     #[inline(always)]
     unsafe fn relative<const KIND: u8>(
         node: &Node4,
@@ -542,10 +606,11 @@ mod avx {
     }
 
     /// Kinds of packet, by their active lanes' reciprocal directions: on each axis finite and
-    /// of one sign, finite, or any.
+    /// of one sign, finite, or any; and of rays each from its own origin, of any directions.
     const COHERENT: u8 = 2;
     const FINITE: u8 = 1;
     const ANY: u8 = 0;
+    const ORIGINS: u8 = 3;
 
     /// The lanes of `mask` whose rays enter child `c` of a node (its slabs minus the origin
     /// in `rel`, as [`relative`] lays them out), each by its own test, and where `NEAR` the
@@ -570,8 +635,17 @@ mod avx {
             // the same order (AVX-512's max and min return the second operand on a NaN as
             // AVX's do; the blend takes `hi` where the sign bit of 1/d is set, as blendv does).
             let l16 = l16.unwrap_unchecked();
-            let lo: [__m512; 3] = std::array::from_fn(|a| _mm512_set1_ps(rel[2 * a][c]));
-            let hi: [__m512; 3] = std::array::from_fn(|a| _mm512_set1_ps(rel[2 * a + 1][c]));
+            // Each lane's `slab − o` where the lanes have their own origins.
+            let own = |s: f32, a: usize| {
+                let s = _mm512_set1_ps(s);
+                if KIND == ORIGINS {
+                    _mm512_sub_ps(s, l16.lane_o[a])
+                } else {
+                    s
+                }
+            };
+            let lo: [__m512; 3] = std::array::from_fn(|a| own(rel[2 * a][c], a));
+            let hi: [__m512; 3] = std::array::from_fn(|a| own(rel[2 * a + 1][c], a));
             let slabs = |a: usize| {
                 let inv = l16.inv[a];
                 if KIND == COHERENT {
@@ -623,12 +697,18 @@ mod avx {
             }
             let slabs = |a: usize| {
                 let inv = l.inv[a][h];
+                let (lo, hi) = if KIND == ORIGINS {
+                    let o = l.lane_o[a][h];
+                    (_mm256_sub_ps(lo[a], o), _mm256_sub_ps(hi[a], o))
+                } else {
+                    (lo[a], hi[a])
+                };
                 if KIND == COHERENT {
-                    (_mm256_mul_ps(lo[a], inv), _mm256_mul_ps(hi[a], inv))
+                    (_mm256_mul_ps(lo, inv), _mm256_mul_ps(hi, inv))
                 } else {
                     (
-                        _mm256_mul_ps(_mm256_blendv_ps(lo[a], hi[a], inv), inv),
-                        _mm256_mul_ps(_mm256_blendv_ps(hi[a], lo[a], inv), inv),
+                        _mm256_mul_ps(_mm256_blendv_ps(lo, hi, inv), inv),
+                        _mm256_mul_ps(_mm256_blendv_ps(hi, lo, inv), inv),
                     )
                 }
             };

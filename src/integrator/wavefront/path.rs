@@ -321,7 +321,7 @@ impl Wavefront<'_> {
         groups: &mut [Lanes<S>],
         rays: &mut Vec<crate::geometry::Ray>,
     ) {
-        use std::arch::x86_64::_pdep_u64;
+        use std::arch::x86_64::{_pdep_u64, _pext_u64};
         // The rays, packed: origin and direction by axis. Room for every group's sixteen,
         // their answers a bit each of a u64.
         const ROOM: usize = 16 * GROUPS;
@@ -329,11 +329,16 @@ impl Wavefront<'_> {
         let mut o = [[0f32; ROOM + 16]; 3];
         let mut d = [[0f32; ROOM + 16]; 3];
         let mut n = 0;
+        // The packed rays that leave a path's first vertex (bit k: ray k).
+        let mut first = 0u64;
         for g in groups.iter() {
             let sh = &g.shadow;
             if sh.lanes == 0 {
                 continue;
             }
+            // (After `front`, a path's depth counts the vertex it sampled the light from.)
+            let at_first = (0..16).fold(0u64, |m, l| m | ((g.depth[l] == 1) as u64) << l);
+            first |= _pext_u64(at_first, sh.lanes as u64) << n;
             // The lanes past the packed ones are overwritten by the next group's, or never
             // read.
             for axis in 0..3 {
@@ -345,7 +350,7 @@ impl Wavefront<'_> {
         // Their answers, a bit a ray.
         let blocked = match self.trace {
             Trace::Lanes => self.occluded_lanes(&o, &d, n),
-            Trace::Scene => self.occluded_scene(&o, &d, n, rays),
+            Trace::Scene => self.occluded_scene(&o, &d, n, first, rays),
         };
         let mut at = 0;
         for g in groups.iter_mut() {
@@ -396,26 +401,47 @@ impl Wavefront<'_> {
     }
 
     /// Which of the `n` packed shadow rays are blocked, a bit a ray, by the scene's own
-    /// query ([`Trace::Scene`]): `spawn_ray_to`'s rays, clear up to 1 − `SHADOW_EPSILON`,
-    /// traced together (`Scene::occluded_many`, interleaved where the scene outgrows the
-    /// cache).
+    /// query ([`Trace::Scene`]): `spawn_ray_to`'s rays, clear up to 1 − `SHADOW_EPSILON`.
+    /// Those from paths' first vertices (bits of `first`), consecutive samples of a pixel
+    /// towards the lights, sixteen to a packet (`Scene::occluded_origins`); the others
+    /// together (`Scene::occluded_many`, interleaved where the scene outgrows the cache).
     #[inline(always)]
     fn occluded_scene<const ROOM: usize>(
         &self,
         o: &[[f32; ROOM]; 3],
         d: &[[f32; ROOM]; 3],
         n: usize,
+        first: u64,
         rays: &mut Vec<crate::geometry::Ray>,
     ) -> u64 {
         let ray = |k: usize| {
             let v = |a: &[[f32; ROOM]; 3]| glam::Vec3A::new(a[0][k], a[1][k], a[2][k]);
             crate::geometry::Ray::new(v(o), v(d))
         };
-        rays.clear();
-        rays.extend((0..n).map(ray));
         let t_max = [1.0 - SHADOW_EPSILON; ROOM];
-        let mut out = [false; ROOM];
-        self.scene.occluded_many(rays, &t_max[..n], &mut out[..n]);
-        (0..n).fold(0, |b, k| b | (out[k] as u64) << k)
+        let mut blocked = 0u64;
+        // Each part's rays in packed order, and where each sits among them.
+        let mut traced = |part: u64, rays: &mut Vec<crate::geometry::Ray>, packets: bool| {
+            let mut at = [0usize; ROOM];
+            rays.clear();
+            for (j, k) in crate::simd::lanes_of64(part).enumerate() {
+                at[j] = k;
+                rays.push(ray(k));
+            }
+            let m = rays.len();
+            let mut out = [false; ROOM];
+            if packets {
+                self.scene.occluded_origins(rays, &t_max[..m], &mut out[..m]);
+            } else {
+                self.scene.occluded_many(rays, &t_max[..m], &mut out[..m]);
+            }
+            for j in 0..m {
+                blocked |= (out[j] as u64) << at[j];
+            }
+        };
+        let all = if n == 64 { !0 } else { (1u64 << n) - 1 };
+        traced(first & all, rays, true);
+        traced(!first & all, rays, false);
+        blocked
     }
 }
