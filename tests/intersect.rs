@@ -962,6 +962,22 @@ fn bvh_handles_negative_zero_direction_components() {
     assert!(hits > 100, "{hits} hits");
 }
 
+/// Direction `d` as it is, or for `case` % 11 below 3 an awkward one for a box test: axis
+/// `k % 3` of it 0.0 or −0.0, or only that axis, ±1.
+fn awkward(rng: &mut Rng, d: Vec3A, case: usize, k: usize) -> [f32; 3] {
+    let mut d = d.to_array();
+    match case % 11 {
+        0 => d[k % 3] = 0.0,
+        1 => d[k % 3] = -0.0,
+        2 => {
+            d = [0.0; 3];
+            d[k % 3] = if rng.f() < 0.5 { 1.0 } else { -1.0 };
+        }
+        _ => {}
+    }
+    d
+}
+
 /// Shadow-ray packets (sixteen rays from one origin, traced together, with AVX or AVX-512
 /// where the CPU has it) give each ray exactly the answer of its own traversal and of brute force: rays
 /// to points in the cloud and beyond it, with axis-parallel directions and −0.0 components
@@ -995,16 +1011,7 @@ fn shadow_packets_match_single_rays() {
             } else {
                 c + rng.ball() * r
             };
-            let mut d = (target - o).to_array();
-            match (i + lane) % 11 {
-                0 => d[lane % 3] = 0.0,
-                1 => d[lane % 3] = -0.0,
-                2 => {
-                    d = [0.0; 3];
-                    d[lane % 3] = if rng.f() < 0.5 { 1.0 } else { -1.0 };
-                }
-                _ => {}
-            }
+            let d = awkward(&mut rng, target - o, i + lane, lane);
             (pk.d[0][lane], pk.d[1][lane], pk.d[2][lane]) = (d[0], d[1], d[2]);
             pk.t_max[lane] = if rng.f() < 0.5 {
                 1.0 - 1e-4
@@ -1065,16 +1072,8 @@ fn shadow_rays_of_own_origins_match_single_rays() {
         let mut t_max = Vec::new();
         for k in 0..n {
             let o = centre + rng.ball() * spread;
-            let mut d = (c + rng.ball() * r - o).to_array();
-            match (i + k) % 11 {
-                0 => d[k % 3] = 0.0,
-                1 => d[k % 3] = -0.0,
-                2 => {
-                    d = [0.0; 3];
-                    d[k % 3] = if rng.f() < 0.5 { 1.0 } else { -1.0 };
-                }
-                _ => {}
-            }
+            let target = c + rng.ball() * r;
+            let d = awkward(&mut rng, target - o, i + k, k);
             rays.push(Ray::new(o, Vec3A::from_array(d)));
             t_max.push(if rng.f() < 0.5 {
                 1.0 - 1e-4

@@ -84,19 +84,9 @@ impl WideBvh {
         pk: &RayPacket,
         active: u32,
         lanes: usize,
-        mut hit: F,
+        hit: F,
     ) -> u32 {
-        debug_assert!(active < 1 << PACKET && matches!(lanes, 1 | 8 | PACKET));
-        if self.root == EMPTY || active == 0 {
-            return 0;
-        }
-        #[cfg(target_arch = "x86_64")]
-        if let Some(wide) = avx::width(lanes) {
-            // SAFETY: `avx::width` checked the CPU's AVX, and AVX-512 where `wide`.
-            let w = &mut avx::Occlusion(&mut hit);
-            return unsafe { avx::run(self, pk, None, active, wide, w) };
-        }
-        self.occluded_each(pk, active, hit)
+        self.occluded_lanes(pk, None, active, lanes, hit)
     }
 
     /// [`Self::occluded_packet_with`] for rays of their own origins (`o`, by axis then lane;
@@ -111,6 +101,20 @@ impl WideBvh {
         pk: &RayPacket,
         active: u32,
         lanes: usize,
+        hit: F,
+    ) -> u32 {
+        self.occluded_lanes(pk, Some(o), active, lanes, hit)
+    }
+
+    /// Both of the above: the lanes' rays from `pk`, or from `origins` in the directions
+    /// of `pk`.
+    #[inline(always)]
+    fn occluded_lanes<F: FnMut(usize, u32) -> u32>(
+        &self,
+        pk: &RayPacket,
+        origins: Option<&[[f32; PACKET]; 3]>,
+        active: u32,
+        lanes: usize,
         mut hit: F,
     ) -> u32 {
         debug_assert!(active < 1 << PACKET && matches!(lanes, 1 | 8 | PACKET));
@@ -121,27 +125,16 @@ impl WideBvh {
         if let Some(wide) = avx::width(lanes) {
             let w = &mut avx::Occlusion(&mut hit);
             // SAFETY: `avx::width` checked the CPU's AVX, and AVX-512 where `wide`.
-            return unsafe { avx::run(self, pk, Some(o), active, wide, w) };
+            return unsafe { avx::run(self, pk, origins, active, wide, w) };
         }
-        let mut pk = *pk;
+        // Without AVX, each ray by the single-ray traversal: the same answers.
         let mut occ = 0;
         for lane in crate::simd::lanes_of(active) {
-            pk.o = Vec3A::new(o[0][lane], o[1][lane], o[2][lane]);
-            occ |= self.occluded_each(&pk, 1 << lane, &mut hit);
-        }
-        occ
-    }
-
-    /// The same answers, each ray by the single-ray traversal: the fallback without AVX.
-    fn occluded_each<F: FnMut(usize, u32) -> u32>(
-        &self,
-        pk: &RayPacket,
-        active: u32,
-        mut hit: F,
-    ) -> u32 {
-        let mut occ = 0;
-        for lane in crate::simd::lanes_of(active) {
-            if self.occluded(&pk.ray(lane), pk.t_max[lane], |p, _| hit(p, 1 << lane) != 0) {
+            let mut ray = pk.ray(lane);
+            if let Some(o) = origins {
+                ray.o = Vec3A::new(o[0][lane], o[1][lane], o[2][lane]);
+            }
+            if self.occluded(&ray, pk.t_max[lane], |p, _| hit(p, 1 << lane) != 0) {
                 occ |= 1 << lane;
             }
         }
