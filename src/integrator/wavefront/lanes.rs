@@ -4,7 +4,7 @@
 use super::rng::LaneSampler;
 use crate::simd::{lanes_of, Float, Vector3};
 use super::simd::{F, M, U, V3};
-use super::{Trace, Wavefront};
+use super::{Bits, LaneMask, Trace, Wavefront};
 use crate::accel::{RayPacket, PACKET};
 use crate::camera::Camera;
 use crate::geometry::Ray;
@@ -28,14 +28,14 @@ pub(super) struct Lanes<S> {
     pub(super) pixel: [u32; 16],
     pub(super) rng: S,
     /// Lanes holding a path.
-    pub(super) active: M,
+    pub(super) active: Bits,
     /// Lanes whose path got to its vertex by a non-specular BSDF sample (for MIS on
     /// emitter hits).
-    pub(super) has_prev: M,
+    pub(super) has_prev: Bits,
     /// Lanes whose path ended at the last step, their samples not yet on the film.
-    pub(super) done: M,
+    pub(super) done: Bits,
     /// Lanes whose ray is their camera ray, not yet traced (from the camera's eye).
-    pub(super) fresh: M,
+    pub(super) fresh: Bits,
     /// The shadow rays of the last step's light samples, waiting to be traced.
     pub(super) shadow: Shadows,
     /// With `Trace::Scene`, the active lanes' hits, found for all groups at once before
@@ -47,9 +47,9 @@ pub(super) struct Lanes<S> {
 pub(super) struct Shadows {
     /// The lanes that sampled the light, those whose sample needs a shadow ray, and of
     /// those the ones blocked (set by `shadows`).
-    pub(super) nee: M,
-    pub(super) lanes: M,
-    pub(super) blocked: M,
+    pub(super) nee: Bits,
+    pub(super) lanes: Bits,
+    pub(super) blocked: Bits,
     pub(super) o: [[f32; 16]; 3],
     pub(super) d: [[f32; 16]; 3],
     /// What `l += β·lit` adds: β times the contribution where the ray is clear, β·0 where
@@ -118,7 +118,7 @@ impl Wavefront<'_> {
         loop {
             for st in groups.iter_mut() {
                 // Free lanes take the next samples.
-                let mut fresh: M = 0;
+                let mut fresh: Bits = 0;
                 let mut free = !st.active;
                 while free != 0 {
                     while k < pixels.len() && i >= pixels[k].samples.1 {
@@ -180,7 +180,7 @@ impl Wavefront<'_> {
                 n += 1;
             }
         }
-        let mut rest: [M; GROUPS] =
+        let mut rest: [Bits; GROUPS] =
             std::array::from_fn(|g| groups.get(g).map_or(0, |st| st.active));
         if n > 1 {
             for chunk in fresh[..n].chunks(PACKET) {
@@ -245,10 +245,11 @@ impl Wavefront<'_> {
         &self,
         cam: &Camera,
         st: &mut Lanes<S>,
-        fresh: M,
+        bits: Bits,
         px: &[f32; 16],
         py: &[f32; 16],
     ) {
+        let fresh = M::from_bits(bits);
         let [ux, uy] = st.rng.next::<2>(fresh);
         let s = (F::load(px) + ux) / F::splat(cam.width as f32);
         let t = (F::load(py) + uy) / F::splat(cam.height as f32);
@@ -262,9 +263,9 @@ impl Wavefront<'_> {
         keep(&mut st.l, V3::zero());
         F::select(fresh, F::splat(1.0), F::load(&st.eta2)).store(&mut st.eta2);
         U::select(fresh, U::splat(0), U::load(&st.depth)).store(&mut st.depth);
-        st.has_prev &= !fresh;
-        st.fresh |= fresh;
-        st.active |= fresh;
+        st.has_prev &= !bits;
+        st.fresh |= bits;
+        st.active |= bits;
     }
     }
 }

@@ -63,6 +63,46 @@ use crate::render::{self, RenderSettings, RenderStats, TilePixel};
 use crate::sampler::SamplerKind;
 use crate::scene::{Scene, META_EMITTER, META_MATERIAL, SPHERE};
 
+/// Lanes as the lanes' state keeps them between steps and loops over them: bit i for lane i.
+pub(crate) type Bits = u16;
+
+/// A mask of sixteen lanes as the lanes' code reads it: its bits (bit i for lane i), and
+/// from bits. The AVX-512 backend's masks are the bits themselves (`u16`, its `k`
+/// registers); the AVX2 backend's are vector masks, which these convert.
+pub(crate) trait LaneMask: Copy {
+    fn bits(self) -> Bits;
+    fn from_bits(bits: Bits) -> Self;
+    /// Whether any lane is set.
+    fn any(self) -> bool {
+        self.bits() != 0
+    }
+    /// No lane set.
+    #[inline(always)]
+    fn none() -> Self {
+        Self::from_bits(0)
+    }
+    /// How many lanes are set.
+    #[inline(always)]
+    fn count(self) -> u32 {
+        self.bits().count_ones()
+    }
+}
+
+impl LaneMask for Bits {
+    #[inline(always)]
+    fn bits(self) -> Bits {
+        self
+    }
+    #[inline(always)]
+    fn from_bits(bits: Bits) -> Bits {
+        bits
+    }
+    #[inline(always)]
+    fn any(self) -> bool {
+        self != 0
+    }
+}
+
 /// Most primitives the wavefront traces (by brute force, as `accel::flat` does).
 pub const MAX_PRIMS: usize = 64;
 

@@ -5,7 +5,7 @@
 //! at a time and each lane's shadow rays traced as its own packets.
 
 use super::simd::{F, M, V3};
-use super::Wavefront;
+use super::{Bits, LaneMask, Wavefront};
 use crate::accel::{RayPacket, PACKET};
 use crate::geometry::ray::{offset_by, offset_push, offset_ray_origin, SHADOW_EPSILON};
 use crate::geometry::Frame;
@@ -89,7 +89,7 @@ impl Wavefront<'_> {
         stats: &mut RayStats,
     ) -> V3 {
         let lanes = lanes & v.oriented;
-        if lanes == 0 {
+        if !lanes.any() {
             return V3::zero();
         }
         let zero = F::zero();
@@ -116,7 +116,7 @@ impl Wavefront<'_> {
             // whose ray leaves below the surface, and the rays' directions (by sample,
             // axis and lane).
             let mut weight = [zero; PACKET];
-            let (mut good, mut under) = ([0 as M; PACKET], [0 as M; PACKET]);
+            let (mut good, mut under) = ([0 as Bits; PACKET], [0 as Bits; PACKET]);
             let mut dirs = [[[0f32; 16]; 3]; PACKET];
             for s in 0..m {
                 let j = first + s as u32;
@@ -126,19 +126,20 @@ impl Wavefront<'_> {
                 let q = planar_point(a, b, c, lt.triangle, u, w);
                 let d = q - v.p;
                 let dist2 = d.dot(d);
-                under[s] = v.ng.dot(d).lt(zero);
+                let down = v.ng.dot(d).lt(zero);
                 let (faces, w) = lambert_weight(d, dist2, (nl, neg_area), (ns, v.side), k);
-                good[s] = lanes & dist2.gt(zero) & faces;
+                under[s] = down.bits();
+                good[s] = (lanes & dist2.gt(zero) & faces).bits();
                 weight[s] = w;
-                shadow_dir(q, (nl, off), under[s], (above, below)).store(&mut dirs[s]);
+                shadow_dir(q, (nl, off), down, (above, below)).store(&mut dirs[s]);
             }
             // Each lane's shadow rays, in up to two packets by the side they leave from.
-            let mut visible = [0 as M; PACKET];
-            let mut ll = lanes;
+            let mut visible = [0 as Bits; PACKET];
+            let mut ll = lanes.bits();
             while ll != 0 {
                 let lane = ll.trailing_zeros() as usize;
                 ll &= ll - 1;
-                let bit = |x: &[M; PACKET]| {
+                let bit = |x: &[Bits; PACKET]| {
                     (0..m).fold(0u32, |acc, s| acc | (((x[s] >> lane) & 1) as u32) << s)
                 };
                 let (ok, down) = (bit(&good), bit(&under));
@@ -161,12 +162,12 @@ impl Wavefront<'_> {
                     }
                 }
                 for (s, vis) in visible.iter_mut().enumerate().take(m) {
-                    *vis |= (((seen >> s) & 1) as M) << lane;
+                    *vis |= (((seen >> s) & 1) as Bits) << lane;
                 }
             }
             for s in 0..m {
                 let r = &mut acc[(first as usize + s) % 4];
-                *r = *r + F::select(visible[s], weight[s], zero);
+                *r = *r + F::select(M::from_bits(visible[s]), weight[s], zero);
             }
             first += m as u32;
         }

@@ -6,7 +6,7 @@ use super::bsdf;
 use super::nee::Vertex;
 use super::rng::LaneSampler;
 use super::simd::{F, M, U, V3};
-use super::{trace, Lanes, Trace, Wavefront, GROUPS};
+use super::{trace, Bits, LaneMask, Lanes, Trace, Wavefront, GROUPS};
 use crate::scene::Interaction;
 use super::{BLACK, EMITTER, GLASS, KIND, LAMBERT, MIRROR, TWO_SIDED};
 use crate::film::PixelSums;
@@ -57,11 +57,11 @@ impl Wavefront<'_> {
     /// The lanes' hits by the scene's own queries ([`Trace::Scene`]): the values of each
     /// active lane's interaction in `hits` (`Scene::intersect`'s, as the path tracer's).
     #[inline(always)]
-    fn surface_scene(&self, hits: &[Option<Interaction>; 16], active: M) -> Surface {
+    fn surface_scene(&self, hits: &[Option<Interaction>; 16], active: Bits) -> Surface {
         let mut v = [[[0f32; 16]; 3]; 5];
         let [p, p_err, ng, ns, colour] = &mut v;
         let (mut flags, mut eta) = ([0u32; 16], [1f32; 16]);
-        let mut hit: M = 0;
+        let mut hit: Bits = 0;
         let mut m = active;
         while m != 0 {
             let l = m.trailing_zeros() as usize;
@@ -83,7 +83,7 @@ impl Wavefront<'_> {
             eta[l] = sh.eta;
         }
         Surface {
-            hit,
+            hit: M::from_bits(hit),
             p: V3::load(p),
             p_err: V3::load(p_err),
             ng: V3::load(ng),
@@ -128,7 +128,8 @@ impl Wavefront<'_> {
     /// paths that end, which [`Self::back`] adds to the film once the shadow rays are in.
     #[inline]
     pub(super) unsafe fn front<S: LaneSampler>(&self, st: &mut Lanes<S>, stats: &mut RenderStats) {
-        let active = st.active;
+        let bits = st.active;
+        let active = M::from_bits(bits);
         let (zero, one) = (F::zero(), F::splat(1.0));
         let o = V3::load(&st.o);
         let d = V3::load(&st.d);
@@ -136,15 +137,15 @@ impl Wavefront<'_> {
         let mut l = V3::load(&st.l);
         let mut eta2 = F::load(&st.eta2);
         let depth = U::load(&st.depth);
-        stats.rays.rays += active.count_ones() as u64;
+        stats.rays.rays += bits.count_ones() as u64;
         let sf = match self.trace {
             Trace::Lanes => unsafe { self.surface_lanes(o, d, active) },
-            Trace::Scene => self.surface_scene(&st.hits, active),
+            Trace::Scene => self.surface_scene(&st.hits, bits),
         };
         let hidden = if self.hide_emitters {
             depth.eq(U::splat(0))
         } else {
-            0
+            M::none()
         };
         // A ray that leaves the scene: these scenes have no environment light, so it adds
         // β·0, as `escaped` returns (which is not nothing where β is not finite).
@@ -168,7 +169,7 @@ impl Wavefront<'_> {
         let light_pdf = area_pdf(prev_p, p, ng, F::splat(lt.pmf), F::splat(lt.area));
         let rays = F::splat(self.shadow_rays as f32);
         let mis = power_heuristic_lanes(F::load(&st.prev_pdf), rays * light_pdf);
-        let e = V3::select(emitter & st.has_prev, le.scale(mis), le);
+        let e = V3::select(emitter & M::from_bits(st.has_prev), le.scale(mis), le);
         l = V3::select(hit & !hidden, l + beta * e, l);
 
         // The path's length, and black bodies.
@@ -191,8 +192,8 @@ impl Wavefront<'_> {
         // sample's contribution, or β·0 if it is blocked) wait for `shadows`.
         let nee = cont & lambert;
         st.shadow.lanes = 0;
-        st.shadow.nee = nee;
-        if nee != 0 {
+        st.shadow.nee = nee.bits();
+        if nee.any() {
             let u = st.rng.next::<3>(nee);
             let v = Vertex {
                 p,
@@ -205,9 +206,9 @@ impl Wavefront<'_> {
             };
             if self.shadow_rays == 1 {
                 let (lanes, o, d, contribution) = self.one_sample(&v, nee, u);
-                stats.rays.shadow_rays += lanes.count_ones() as u64;
+                stats.rays.shadow_rays += lanes.count() as u64;
                 let sh = &mut st.shadow;
-                sh.lanes = lanes;
+                sh.lanes = lanes.bits();
                 o.store(&mut sh.o);
                 d.store(&mut sh.d);
                 (beta * contribution).store(&mut sh.lit);
@@ -254,9 +255,9 @@ impl Wavefront<'_> {
         bs.pdf.store(&mut st.prev_pdf);
         depth.store(&mut st.depth);
         // After a specular bounce the next emitter hit takes no MIS weight.
-        st.has_prev = alive & lambert;
-        st.active = alive;
-        st.done = done;
+        st.has_prev = (alive & lambert).bits();
+        st.active = alive.bits();
+        st.done = done.bits();
     }
     }
 
@@ -277,11 +278,11 @@ impl Wavefront<'_> {
         let sh = &mut st.shadow;
         if sh.nee != 0 {
             let lit = V3::select(
-                sh.lanes & !sh.blocked,
+                M::from_bits(sh.lanes & !sh.blocked),
                 V3::load(&sh.lit),
                 V3::load(&sh.dark),
             );
-            l = V3::select(sh.nee, l + lit, l);
+            l = V3::select(M::from_bits(sh.nee), l + lit, l);
             l.store(&mut st.l);
             (sh.nee, sh.lanes) = (0, 0);
         }
@@ -290,7 +291,7 @@ impl Wavefront<'_> {
             return;
         }
         let ls = [l.x.to_array(), l.y.to_array(), l.z.to_array()];
-        let finite = l.is_finite();
+        let finite = l.is_finite().bits();
         let mut m = done;
         while m != 0 {
             let lane = m.trailing_zeros() as usize;
@@ -355,7 +356,7 @@ impl Wavefront<'_> {
         let mut at = 0;
         for g in groups.iter_mut() {
             let sh = &mut g.shadow;
-            sh.blocked = _pdep_u64(blocked >> at, sh.lanes as u64) as M;
+            sh.blocked = _pdep_u64(blocked >> at, sh.lanes as u64) as Bits;
             at += sh.lanes.count_ones();
         }
     }
@@ -376,11 +377,11 @@ impl Wavefront<'_> {
         let mut blocked = 0u64;
         let t_max = F::splat(1.0 - SHADOW_EPSILON);
         for first in (0..n).step_by(16) {
-            let lanes = if n - first >= 16 {
-                M::MAX
+            let lanes = M::from_bits(if n - first >= 16 {
+                Bits::MAX
             } else {
                 (1 << (n - first)) - 1
-            };
+            });
             let v = |a: &[[f32; ROOM]; 3]| V3 {
                 x: F::load_at(&a[0], first),
                 y: F::load_at(&a[1], first),
@@ -395,7 +396,7 @@ impl Wavefront<'_> {
                 t_max,
                 lanes,
             );
-            blocked |= (b as u64) << first;
+            blocked |= (b.bits() as u64) << first;
         }
         blocked
     }

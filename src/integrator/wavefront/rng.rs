@@ -8,6 +8,7 @@
 
 use crate::simd::Float;
 use super::simd::{pcg32, F, M, U};
+use super::{Bits, LaneMask};
 use crate::sampler::{scrambled, shuffled, sobol4_tables, Uint, DIM_HASH, SCRAMBLE_4D};
 use crate::sampler::SOBOL_DIMS;
 use crate::sampler::{Sampler, SamplerKind};
@@ -83,7 +84,7 @@ pub struct Sobol16 {
     /// Requests made so far.
     dim: [u32; 16],
     /// Lanes whose sample draws Sobol points at all.
-    sobol: M,
+    sobol: Bits,
     pcg: Pcg16,
 }
 
@@ -117,12 +118,14 @@ impl LaneSampler for Sobol16 {
     #[inline(always)]
     unsafe fn next<const N: usize>(&mut self, m: M) -> [F; N] {
         let dim = U::load(&self.dim);
-        let s = m & self.sobol & dim.lt(U::splat(SOBOL_DIMS));
+        let s = m & M::from_bits(self.sobol) & dim.lt(U::splat(SOBOL_DIMS));
         let mut out = [F::zero(); N];
-        if s != m {
-            out = self.pcg.next::<N>(m & !s);
+        // (`s` lies in `m`.)
+        let rest = m & !s;
+        if rest.any() {
+            out = self.pcg.next::<N>(rest);
         }
-        if s == 0 {
+        if !s.any() {
             return out;
         }
         let (idx, seed) = shuffled(

@@ -1,21 +1,27 @@
 //! Sixteen f32 lanes in two AVX2 registers (lanes 0–7 in the first, 8–15 in the second),
 //! with the same operations as the AVX-512 backend (`simd.rs`), for CPUs without AVX-512:
 //! each the IEEE operation the scalar code performs on one lane (no FMA, no reciprocal
-//! approximations), so a lane computes the same bits on either backend. Lane masks are the
-//! same sixteen bits; where an operation takes one, it is widened to a vector mask.
+//! approximations), so a lane computes the same bits on either backend. A lane mask is a
+//! vector mask (all ones in a set lane), as the comparisons give it and `blendv` takes it;
+//! it becomes the sixteen bits of the other backend's masks only where code reads them
+//! (`LaneMask::bits`). Kept as bits, every comparison had taken two `movemask`s and a pack,
+//! and every select a broadcast, an `and` and a compare a half, all on the dependency
+//! chains of the primitive tests (see docs/performance.md).
 //!
 //! As in `simd.rs`, these are `#[inline(always)]` safe functions that run AVX2
 //! instructions, sound only because nothing outside this private module tree calls them:
 //! every call is made inside a function compiled for AVX2 (`lanes_fn!` in `avx2.rs`), which
 //! runs only where `Backend::detect` found the features.
 
+use super::super::LaneMask;
 use crate::sampler::Uint;
 use crate::simd::Float;
 use std::arch::x86_64::*;
-use std::ops::{Add, BitAnd, BitOr, BitXor, Div, Mul, Neg, Sub};
+use std::ops::{Add, BitAnd, BitAndAssign, BitOr, BitOrAssign, BitXor, Div, Mul, Neg, Not, Sub};
 
-/// A mask of lanes, bit i for lane i.
-pub type M = u16;
+/// A mask of lanes: all ones in each lane set, all zeros in the others.
+#[derive(Clone, Copy)]
+pub struct M(pub [__m256; 2]);
 
 /// Sixteen f32 lanes.
 #[derive(Clone, Copy)]
@@ -47,19 +53,79 @@ macro_rules! both {
     };
 }
 
-/// The sixteen-bit mask of two halves' comparison results (all ones or all zeros a lane).
+/// Two halves' comparison results as a mask.
 #[inline(always)]
 fn mask_of(c: [__m256; 2]) -> M {
-    unsafe { (_mm256_movemask_ps(c[0]) as u32 | (_mm256_movemask_ps(c[1]) as u32) << 8) as M }
+    M(c)
 }
 
-/// The vector mask of half `h` of `m`: all ones in the lanes whose bit is set.
+/// Half `h` of `m` as integer lanes.
 #[inline(always)]
 fn lanes_of(m: M, h: usize) -> __m256i {
-    unsafe {
-        let bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
-        let b = _mm256_set1_epi32(((m >> (8 * h)) & 0xff) as i32);
-        _mm256_cmpeq_epi32(_mm256_and_si256(b, bits), bits)
+    unsafe { _mm256_castps_si256(m.0[h]) }
+}
+
+impl LaneMask for M {
+    #[inline(always)]
+    fn bits(self) -> u16 {
+        unsafe {
+            (_mm256_movemask_ps(self.0[0]) as u32 | (_mm256_movemask_ps(self.0[1]) as u32) << 8)
+                as u16
+        }
+    }
+    /// All ones in the lanes whose bit is set.
+    #[inline(always)]
+    fn from_bits(m: u16) -> M {
+        M(both!(h => unsafe {
+            let bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+            let b = _mm256_set1_epi32(((m >> (8 * h)) & 0xff) as i32);
+            _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(b, bits), bits))
+        }))
+    }
+    #[inline(always)]
+    fn any(self) -> bool {
+        unsafe {
+            _mm256_testz_ps(
+                _mm256_or_ps(self.0[0], self.0[1]),
+                _mm256_or_ps(self.0[0], self.0[1]),
+            ) == 0
+        }
+    }
+}
+
+impl BitAnd for M {
+    type Output = M;
+    #[inline(always)]
+    fn bitand(self, o: M) -> M {
+        M(both!(h => unsafe { _mm256_and_ps(self.0[h], o.0[h]) }))
+    }
+}
+impl BitOr for M {
+    type Output = M;
+    #[inline(always)]
+    fn bitor(self, o: M) -> M {
+        M(both!(h => unsafe { _mm256_or_ps(self.0[h], o.0[h]) }))
+    }
+}
+impl Not for M {
+    type Output = M;
+    #[inline(always)]
+    fn not(self) -> M {
+        M(both!(h => unsafe {
+            _mm256_xor_ps(self.0[h], _mm256_castsi256_ps(_mm256_set1_epi32(-1)))
+        }))
+    }
+}
+impl BitAndAssign for M {
+    #[inline(always)]
+    fn bitand_assign(&mut self, o: M) {
+        *self = *self & o;
+    }
+}
+impl BitOrAssign for M {
+    #[inline(always)]
+    fn bitor_assign(&mut self, o: M) {
+        *self = *self | o;
     }
 }
 
@@ -110,7 +176,7 @@ impl F {
     /// The lanes of `m`, in order, written to `a[at..]`; the rest of `a[at..at + 16]` is
     /// overwritten with zeros.
     #[inline(always)]
-    pub fn compress_to(self, m: M, a: &mut [f32], at: usize) {
+    pub fn compress_to(self, m: u16, a: &mut [f32], at: usize) {
         let a: &mut [f32; 16] = (&mut a[at..at + 16]).try_into().unwrap();
         let x = self.to_array();
         let mut n = 0;
@@ -136,7 +202,7 @@ impl Float for F {
     type Mask = M;
     #[inline(always)]
     fn any(m: M) -> bool {
-        m != 0
+        m.any()
     }
     #[inline(always)]
     fn splat(x: f32) -> F {
@@ -192,9 +258,7 @@ impl Float for F {
     /// `a` where `m`, else `b`.
     #[inline(always)]
     fn select(m: M, a: F, b: F) -> F {
-        F(
-            both!(h => unsafe { _mm256_blendv_ps(b.0[h], a.0[h], _mm256_castsi256_ps(lanes_of(m, h))) }),
-        )
+        F(both!(h => unsafe { _mm256_blendv_ps(b.0[h], a.0[h], m.0[h]) }))
     }
     /// `self.copysign(sign)`: the magnitude of `self` with the sign bit of `sign`.
     #[inline(always)]
@@ -397,7 +461,7 @@ pub use v3::V3;
 #[inline(always)]
 pub fn pcg32(state: &mut [u64; 16], inc: &[u64; 16], m: M) -> U {
     let mut out = [0u32; 16];
-    let mut mm = m;
+    let mut mm = m.bits();
     while mm != 0 {
         let l = mm.trailing_zeros() as usize;
         mm &= mm - 1;

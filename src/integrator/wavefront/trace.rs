@@ -16,7 +16,7 @@
 
 use crate::simd::{Float, Vector3};
 use super::simd::{F, M, U, V3};
-use super::{Ball, Tri};
+use super::{Ball, LaneMask, Tri};
 use crate::geometry::sphere::intersect_lanes;
 use crate::geometry::Ray;
 use crate::scene::Scene;
@@ -95,7 +95,7 @@ pub unsafe fn closest(
 ) -> Hits {
     let inf = F::splat(f32::INFINITY);
     // The spheres first, each against the nearest hit so far (`Flat::nearest_sphere`).
-    let (mut st, mut sprim, mut shit) = (inf, U::splat(u32::MAX), 0);
+    let (mut st, mut sprim, mut shit) = (inf, U::splat(u32::MAX), M::none());
     for b in balls {
         let (h, t) = intersect_lanes(V3::splat(b.center), F::splat(b.r2), o, d, st);
         let h = h & active;
@@ -110,7 +110,7 @@ pub unsafe fn closest(
     // (`Wavefront::new` lists the triangles in primitive order: the lower primitive of two
     // is the earlier slot.)
     let mut bprim = U::splat(u32::MAX);
-    let mut thit: M = 0;
+    let mut thit = M::none();
     let mut unsure = Unsure::new();
     let zero = F::zero();
     for (j, tri) in tris.iter().enumerate() {
@@ -123,8 +123,8 @@ pub unsafe fn closest(
         bprim = U::select(hit, U::splat(tri.prim), bprim);
         thit |= hit;
         let uns = !(clear | out) & active;
-        if uns != 0 {
-            unsure.list[unsure.n] = (uns, j as u16);
+        if uns.any() {
+            unsure.list[unsure.n] = (uns.bits(), j as u16);
             unsure.n += 1;
         }
     }
@@ -175,6 +175,7 @@ unsafe fn settle(
     let (mut ta, mut ua, mut va) = (t.to_array(), u.to_array(), v.to_array());
     let mut pa = [0u32; 16];
     prim.store(&mut pa);
+    let mut hits = hit.bits();
     for &(lanes, j) in &unsure.list[..unsure.n] {
         let mut m = lanes;
         while m != 0 {
@@ -185,11 +186,12 @@ unsafe fn settle(
             if let Some((tt, uu, vv)) = scene.hit(&ray, p as usize, bound[l]) {
                 if tt < ta[l] || (tt == ta[l] && p < pa[l]) {
                     (ta[l], ua[l], va[l], pa[l]) = (tt, uu, vv, p);
-                    *hit |= 1 << l;
+                    hits |= 1 << l;
                 }
             }
         }
     }
+    *hit = M::from_bits(hits);
     *t = F::load(&ta);
     *u = F::load(&ua);
     *v = F::load(&va);
@@ -212,7 +214,7 @@ pub unsafe fn occluded(
     t_max: F,
     active: M,
 ) -> M {
-    let mut blocked: M = 0;
+    let mut blocked = M::none();
     for b in balls {
         blocked |= intersect_lanes(V3::splat(b.center), F::splat(b.r2), o, d, t_max).0 & active;
     }
@@ -222,8 +224,8 @@ pub unsafe fn occluded(
         let (_, _, t, clear, out) = test(tri, &o, &d);
         blocked |= clear & t.gt(zero) & t.lt(t_max) & active;
         let uns = !(clear | out) & active;
-        if uns != 0 {
-            unsure.list[unsure.n] = (uns, j as u16);
+        if uns.any() {
+            unsure.list[unsure.n] = (uns.bits(), j as u16);
             unsure.n += 1;
         }
     }
@@ -245,8 +247,9 @@ unsafe fn settle_occluded(
     d: &V3,
     t_max: F,
     unsure: &Unsure,
-    mut blocked: M,
+    blocked: M,
 ) -> M {
+    let mut blocked = blocked.bits();
     let (mut oa, mut da) = ([[0f32; 16]; 3], [[0f32; 16]; 3]);
     o.store(&mut oa);
     d.store(&mut da);
@@ -267,6 +270,6 @@ unsafe fn settle_occluded(
             }
         }
     }
-    more
+    M::from_bits(more)
 }
 }
