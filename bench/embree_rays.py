@@ -4,8 +4,9 @@
 renderers' traversal on the same rays, one thread each.
 
 usage: .venv/bin/python bench/embree_rays.py SCENE.xml DIR [--rounds N] [--threads N] [--shuffle]
+       [--repeat N]
 
-For each of DIR/STEM-{camera,bounces,shadow}.f32 (seven little-endian f32 a ray: origin,
+For each of DIR/STEM-{camera,bounces,first,shadow}.f32 (seven little-endian f32 a ray: origin,
 direction, end distance) it prints ns a ray for `ray_intersect_preliminary` (Embree's closest
 hit alone), `ray_intersect` (with the surface interaction) and `ray_test` (occlusion), the
 minimum over the rounds, each evaluated (Dr.Jit is lazy) after an untimed warm-up that compiles
@@ -44,6 +45,8 @@ def main():
     ap.add_argument("dir")
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--repeat", type=int, default=1,
+                    help="trace each sixteen consecutive rays N times over (warm caches)")
     ap.add_argument("--shuffle", action="store_true",
                     help="trace the rays in a random order (fixed seed), not as written")
     a = ap.parse_args()
@@ -51,8 +54,11 @@ def main():
     dr.set_thread_count(a.threads)
     scene = mi.load_file(os.path.abspath(a.scene))
     stem = os.path.splitext(os.path.basename(a.scene))[0]
-    for name in ("camera", "bounces", "shadow"):
+    for name in ("camera", "bounces", "first", "shadow"):
         raw = np.fromfile(os.path.join(a.dir, f"{stem}-{name}.f32"), dtype="<f4").reshape(-1, 7)
+        if a.repeat > 1:
+            m = len(raw) // 16 * 16
+            raw = np.repeat(raw[:m].reshape(-1, 1, 16, 7), a.repeat, axis=1).reshape(-1, 7)
         if a.shuffle:
             raw = raw[np.random.default_rng(1).permutation(len(raw))]
         n = len(raw)

@@ -10,9 +10,14 @@
 //! (`Scene::occluded_origins`, as the renderers trace those of paths' first vertices).
 //!
 //! cargo bench --bench intersect_many -- [SCENE.xml ...] [--bunny N ...] [--batch N] [--rounds N]
-//!                                        [--res N] [--spp N] [--dump DIR]
+//!                                        [--res N] [--spp N] [--dump DIR] [--set NAME]
+//!                                        [--shuffle] [--repeat N]
 //!
-//! (`--bunny N`: the benchmarks' bunny with each triangle split into N², 3 674·N² triangles.)
+//! (`--bunny N`: the benchmarks' bunny with each triangle split into N², 3 674·N² triangles.
+//! The closest-hit sets are `camera`, `bounces` (all three) and `first` (the first bounce
+//! alone); `--set NAME` times that one only. `--shuffle` traces each set in a fixed random
+//! order, what the rays' coherence is worth; `--repeat N` traces each sixteen consecutive
+//! rays N times over, so that all but the first run from warm caches.)
 //!
 //! Defaults: bench/out/scenes/gallery.xml and bench/out/scenes/bunny-box.xml (written by
 //! `python3 bench/make_scenes.py`), batches of 256, 7 rounds. The variants run alternately,
@@ -21,8 +26,8 @@
 //! the one-at-a-time ones, bit for bit, before anything is timed. `--only VARIANT` traces
 //! with that variant only, once (`valgrind --tool=callgrind
 //! --toggle-collect='*intersect_many::time*'`). `--dump DIR` also writes each scene's rays to
-//! `DIR/STEM-{camera,bounces,shadow}.f32` (seven little-endian `f32` a ray: origin,
-//! direction, end distance), for `bench/embree_rays.py`, which times Mitsuba 3's Embree on the
+//! `DIR/STEM-{camera,bounces,first,shadow}.f32` (seven little-endian `f32` a ray: origin,
+//! direction, end distance; unshuffled, unrepeated), for `bench/embree_rays.py`, which times Mitsuba 3's Embree on the
 //! same rays.
 
 mod common;
@@ -178,6 +183,7 @@ fn main() {
     // `--only NAME`: that variant once, no checks (for `valgrind --tool=callgrind`).
     let mut only = None;
     let mut dump = None;
+    let (mut shuffle, mut repeat, mut only_set) = (false, 1usize, None);
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
@@ -192,6 +198,14 @@ fn main() {
             "--spp" => spp = args.next().and_then(|v| v.parse().ok()).expect("--spp N"),
             "--only" => only = Some(args.next().expect("--only VARIANT")),
             "--dump" => dump = Some(args.next().expect("--dump DIR")),
+            "--shuffle" => shuffle = true,
+            "--repeat" => {
+                repeat = args
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .expect("--repeat N")
+            }
+            "--set" => only_set = Some(args.next().expect("--set camera|bounces|first")),
             "--bunny" => scenes.push(format!("bunny:{}", args.next().expect("--bunny N"))),
             "--bench" => {}
             _ => scenes.push(a),
@@ -214,9 +228,11 @@ fn main() {
         };
         let scene = Scene::build(desc);
         let (levels, shadow, shadow_t) = path_rays(&scene, res, spp);
-        let sets = [
+        let mut sets = [
             ("camera", levels[0].clone()),
             ("bounces", levels[1..].concat()),
+            // The first bounce alone: a pixel's samples leave from nearly one point.
+            ("first", levels[1].clone()),
         ];
         if let Some(dir) = &dump {
             let stem = Path::new(path)
@@ -226,9 +242,30 @@ fn main() {
             for (name, rays, t) in [
                 ("camera", &sets[0].1, infinite(&sets[0].1)),
                 ("bounces", &sets[1].1, infinite(&sets[1].1)),
+                ("first", &sets[2].1, infinite(&sets[2].1)),
                 ("shadow", &shadow, shadow_t.clone()),
             ] {
                 write_rays(&Path::new(dir).join(format!("{stem}-{name}.f32")), rays, &t);
+            }
+        }
+        if repeat > 1 {
+            // Each sixteen consecutive rays traced `repeat` times over: all but the first
+            // time from warm caches, so that a ray's time is its instructions' and not its
+            // misses'.
+            for (_, rays) in &mut sets {
+                *rays = rays
+                    .chunks(PACKET)
+                    .flat_map(|c| std::iter::repeat_n(c, repeat).flatten().copied())
+                    .collect();
+            }
+        }
+        if shuffle {
+            // The same rays in no order (a fixed permutation): what their order is worth.
+            for (_, rays) in &mut sets {
+                for i in (1..rays.len()).rev() {
+                    let j = (unit(i as u64 ^ 0x5eed) * (i + 1) as f32) as usize;
+                    rays.swap(i, j.min(i));
+                }
             }
         }
         println!(
@@ -238,6 +275,9 @@ fn main() {
             scene.streams()
         );
         for (name, rays) in &sets {
+            if only_set.as_ref().is_some_and(|s| s != name) {
+                continue;
+            }
             if let Some(v) = &only {
                 let f = VARIANTS
                     .iter()
