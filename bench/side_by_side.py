@@ -6,8 +6,10 @@ the film size, sample count and sampler set, and file names made absolute, to be
 and render it with the same resolution, samples per pixel, path length and thread count.
 
 1. Rate: samples per second of the render itself (scene loading and the acceleration
-   structure's build are reported apart), both with independent random numbers. mcrt's time
-   is the one it prints for its render; Mitsuba's is that of `mi.render` evaluated to a NumPy
+   structure's build are reported apart), both with independent random numbers, each
+   renderer's fastest of --rate-runs renders (3) made in turns with the other's, as the
+   host's load moves one render's time by 10-20 %. mcrt's time is the one it prints for
+   its render; Mitsuba's is that of `mi.render` evaluated to a NumPy
    array, after a warm-up render that is itself evaluated (Dr.Jit is lazy: an unevaluated
    warm-up would run inside the timed render) and after which the timed render must compile no
    kernel (checked in Dr.Jit's kernel history; otherwise it is timed again). Mitsuba's
@@ -24,7 +26,7 @@ and render it with the same resolution, samples per pixel, path length and threa
    faster sampler.
 
 usage: .venv/bin/python bench/side_by_side.py [--quick] [--threads N] [--scenes a,b,...]
-                                               [--max-isa avx2]
+                                               [--max-isa avx2] [--rate-runs N]
        .venv/bin/python bench/side_by_side.py --validate SPP   (image means of both, no timing)
 --max-isa avx2 times both renderers as an AVX2 host runs them, on an AVX-512 host: mcrt with
 MCRT_MAX_ISA=avx2 (no AVX-512 kernel), Mitsuba's Dr.Jit generating code for znver3 (AVX2, eight
@@ -155,10 +157,11 @@ def jit_compiles():
     return len(ks), sum(k.get("codegen_time", 0) + k.get("backend_time", 0) for k in ks)
 
 
-def mitsuba_render(variant, xml, seed):
-    """Loads and renders with Mitsuba; returns (render seconds, load seconds, image). The
-    render is timed warm: a one-sample warm-up compiles the kernels and is evaluated first.
-    (`mi.render(spp=...)` sets the sampler's count for good, so every call passes it.)"""
+def mitsuba_renderer(variant, xml, seed):
+    """Loads a scene into Mitsuba and warms it up; returns (load seconds, render), where
+    `render()` renders it timed, warm, and returns (seconds, image). A four-sample warm-up
+    compiles the kernels and is evaluated first. (`mi.render(spp=...)` sets the sampler's
+    count for good, so every call passes it.)"""
     mi.set_variant(variant)
     mi.set_log_level(mi.LogLevel.Warn)
     t = time.perf_counter()
@@ -172,20 +175,34 @@ def mitsuba_render(variant, xml, seed):
         return img
 
     render(4, seed + 7919)  # warm-up, evaluated (4: square and a power of two, as ldsampler wants)
-    # Mitsuba's kernels depend on the sample count: for `independent` only on whether it is a
-    # power of two (a 4-spp warm-up serves 64 and 256), for `multijitter` and `ldsampler` on
-    # the count itself. Where the warm-up missed a kernel, the full render was the warm-up.
-    for attempt in range(3):
-        jit_compiles()
-        t = time.perf_counter()
-        img = render(spp, seed)
-        secs = time.perf_counter() - t
-        n, ms = jit_compiles()
-        if not variant.startswith("llvm") or n == 0:
-            break
-        print(f"  ({variant} compiled {n} kernel(s) in {ms:.0f} ms during the timed render, "
-              f"{secs:.2f} s; " + ("timing it again)" if attempt < 2 else "kept)"), flush=True)
-    return secs, load, img[:, :, :3]
+
+    def timed():
+        # Mitsuba's kernels depend on the sample count: for `independent` only on whether it
+        # is a power of two (a 4-spp warm-up serves 64 and 256), for `multijitter` and
+        # `ldsampler` on the count itself. Where the warm-up missed a kernel, the full
+        # render was the warm-up.
+        mi.set_variant(variant)
+        for attempt in range(3):
+            jit_compiles()
+            t = time.perf_counter()
+            img = render(spp, seed)
+            secs = time.perf_counter() - t
+            n, ms = jit_compiles()
+            if not variant.startswith("llvm") or n == 0:
+                break
+            print(f"  ({variant} compiled {n} kernel(s) in {ms:.0f} ms during the timed render, "
+                  f"{secs:.2f} s; " + ("timing it again)" if attempt < 2 else "kept)"), flush=True)
+        return secs, img[:, :, :3]
+
+    return load, timed
+
+
+def mitsuba_render(variant, xml, seed):
+    """Loads and renders with Mitsuba (see `mitsuba_renderer`); returns (render seconds, load
+    seconds, image)."""
+    load, timed = mitsuba_renderer(variant, xml, seed)
+    secs, img = timed()
+    return secs, load, img
 
 
 def reference(name, src, ref_spp, variant):
@@ -329,6 +346,8 @@ def main():
     ap.add_argument("--ref-spp", type=int, help="spp of the generated scenes' references "
                     "(default 4096; 1024 with --quick)")
     ap.add_argument("--no-build", action="store_true", help="do not run cargo build --release")
+    ap.add_argument("--rate-runs", type=int, default=3, help="renders of the rate test a "
+                    "renderer, taking turns; each renderer's fastest counts (default 3)")
     ap.add_argument("--validate", type=int, metavar="SPP", help="instead of timing, compare "
                     "the two renderers' image means at --validate-res² with SPP samples")
     ap.add_argument("--validate-res", type=int, default=64)
@@ -337,6 +356,8 @@ def main():
     ap.add_argument("--max-isa", choices=["avx2"], help="time both renderers as an AVX2 host "
                     "runs them (see the module's documentation)")
     a = ap.parse_args()
+    if a.rate_runs < 1:
+        ap.error("--rate-runs must be at least 1")
     a.json = a.json or os.path.join(
         OUT, f"side-by-side{'-' + a.max_isa if a.max_isa else ''}.json")
     names = [n for n in a.scenes.split(",") if n]
@@ -378,20 +399,34 @@ def main():
         r = results[name] = {"rate_res": res, "max_isa": a.max_isa or "native"}
         print(f"\n{name}:", flush=True)
         px = res * res
+        # The renderers take turns, `--rate-runs` times, and each keeps its fastest render:
+        # the host's load moves a single render's time by 10-20 %.
         xml = scene_xml(name + "-rate", src, res, spp_rate, "independent")
-        secs, load, _ = mcrt_render(xml, "independent", SEED_RATE, a.threads)
-        r["mcrt"] = {"samples/s": px * spp_rate / secs, "render s": secs, "load s": load}
-        for v, spp in (("llvm_ad_rgb", spp_rate), ("scalar_rgb", max(4, spp_rate // 4))):
-            xml = scene_xml(f"{name}-rate-{v}", src, res, spp, "independent")
-            secs, load, _ = mitsuba_render(v, xml, SEED_RATE)
-            r[v] = {"samples/s": px * spp / secs, "render s": secs, "load s": load, "spp": spp}
+        spps = {"mcrt": spp_rate, "llvm_ad_rgb": spp_rate, "scalar_rgb": max(4, spp_rate // 4)}
+        timers, loads, times = {}, {}, {k: [] for k in spps}
+        for v in ("llvm_ad_rgb", "scalar_rgb"):
+            vxml = scene_xml(f"{name}-rate-{v}", src, res, spps[v], "independent")
+            loads[v], timers[v] = mitsuba_renderer(v, vxml, SEED_RATE)
+        for _ in range(a.rate_runs):
+            secs, loads["mcrt"], _ = mcrt_render(xml, "independent", SEED_RATE, a.threads)
+            times["mcrt"].append(secs)
+            for v, timed in timers.items():
+                times[v].append(timed()[0])
+        for k, spp in spps.items():
+            best = min(times[k])
+            r[k] = {"samples/s": px * spp / best, "render s": best, "runs s": times[k],
+                    "load s": loads[k], "spp": spp}
         best_v = max(("llvm_ad_rgb", "scalar_rgb"), key=lambda v: r[v]["samples/s"])
         r["mitsuba variant"] = best_v
         r["rate ratio"] = r["mcrt"]["samples/s"] / r[best_v]["samples/s"]
-        print(f"  samples/s: mcrt {r['mcrt']['samples/s'] / 1e6:.3f} M (loaded in "
-              f"{r['mcrt']['load s']:.2f} s), llvm_ad_rgb {r['llvm_ad_rgb']['samples/s'] / 1e6:.3f} M, "
-              f"scalar_rgb {r['scalar_rgb']['samples/s'] / 1e6:.3f} M (loaded in "
-              f"{r['scalar_rgb']['load s']:.2f} s)", flush=True)
+        spread = {k: max(t) / min(t) for k, t in times.items()}
+        print(f"  samples/s (best of {a.rate_runs}, slowest/fastest): mcrt "
+              f"{r['mcrt']['samples/s'] / 1e6:.3f} M ({spread['mcrt']:.2f}; loaded in "
+              f"{r['mcrt']['load s']:.2f} s), llvm_ad_rgb {r['llvm_ad_rgb']['samples/s'] / 1e6:.3f} M "
+              f"({spread['llvm_ad_rgb']:.2f}), scalar_rgb {r['scalar_rgb']['samples/s'] / 1e6:.3f} M "
+              f"({spread['scalar_rgb']:.2f}; loaded in {r['scalar_rgb']['load s']:.2f} s)",
+              flush=True)
+        timers.clear()
 
         REF[name] = (read_exr(os.path.join(ROOT, ref)) if ref
                      else reference(name, src, ref_spp, best_v))
