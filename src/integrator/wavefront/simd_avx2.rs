@@ -456,21 +456,54 @@ mod v3;
 pub use v3::V3;
 
 /// The next output of sixteen PCG32 streams ([`crate::sampler::Pcg32`]), of each lane in
-/// `m`; the other lanes' streams do not move (and their outputs are 0). Lane by lane: AVX2
-/// has no 64-bit multiply.
+/// `m`; the other lanes' streams do not move. Four 64-bit states a register: AVX2 has no
+/// 64-bit multiply, so the state's product is built from three 32-bit ones (lo·lo, and
+/// hi·lo + lo·hi shifted up), the same bits modulo 2⁶⁴; the 32-bit outputs are rotated in
+/// place and gathered. (Lane by lane, with scalar 64-bit multiplies, it cost 6 % more of
+/// the TNCG15 room's instructions with independent numbers.)
 #[inline(always)]
 pub fn pcg32(state: &mut [u64; 16], inc: &[u64; 16], m: M) -> U {
-    let mut out = [0u32; 16];
-    let mut mm = m.bits();
-    while mm != 0 {
-        let l = mm.trailing_zeros() as usize;
-        mm &= mm - 1;
-        let old = state[l];
-        state[l] = old
-            .wrapping_mul(crate::sampler::PCG_MULT)
-            .wrapping_add(inc[l]);
-        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
-        out[l] = xorshifted.rotate_right((old >> 59) as u32);
+    unsafe {
+        let mult = _mm256_set1_epi64x(crate::sampler::PCG_MULT as i64);
+        let mult_hi = _mm256_srli_epi64::<32>(mult);
+        let low = _mm256_setr_epi32(0, 2, 4, 6, 0, 2, 4, 6);
+        let mut out = [_mm_setzero_si128(); 4];
+        for (q, out) in out.iter_mut().enumerate() {
+            let at = 4 * q;
+            let old = _mm256_loadu_si256(state.as_ptr().add(at) as *const _);
+            let inc = _mm256_loadu_si256(inc.as_ptr().add(at) as *const _);
+            let lo = _mm256_mul_epu32(old, mult);
+            let cross = _mm256_add_epi64(
+                _mm256_mul_epu32(_mm256_srli_epi64::<32>(old), mult),
+                _mm256_mul_epu32(old, mult_hi),
+            );
+            let new = _mm256_add_epi64(_mm256_add_epi64(lo, _mm256_slli_epi64::<32>(cross)), inc);
+            // This quarter's four lanes of `m`, each widened to 64 bits.
+            let half = _mm256_castps_si256(m.0[q / 2]);
+            let four = if q % 2 == 0 {
+                _mm256_castsi256_si128(half)
+            } else {
+                _mm256_extracti128_si256::<1>(half)
+            };
+            _mm256_maskstore_epi64(
+                state.as_mut_ptr().add(at) as *mut i64,
+                _mm256_cvtepi32_epi64(four),
+                new,
+            );
+            // ((old >> 18) ^ old) >> 27, truncated, rotated right by old >> 59: in the low
+            // 32 bits of each 64-bit lane (a shift by 32 or more gives 0, so a rotation by 0
+            // is x | 0), then the low halves gathered.
+            let x = _mm256_srli_epi64::<27>(_mm256_xor_si256(_mm256_srli_epi64::<18>(old), old));
+            let rot = _mm256_srli_epi64::<59>(old);
+            let r = _mm256_or_si256(
+                _mm256_srlv_epi32(x, rot),
+                _mm256_sllv_epi32(x, _mm256_sub_epi32(_mm256_set1_epi32(32), rot)),
+            );
+            *out = _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(r, low));
+        }
+        U([
+            _mm256_set_m128i(out[1], out[0]),
+            _mm256_set_m128i(out[3], out[2]),
+        ])
     }
-    U::load(&out)
 }
