@@ -227,6 +227,14 @@ impl Scene {
         }
     }
 
+    /// Whether primitive `i` blocks `ray` before `t_max` where it is seen (through its
+    /// mask), the occlusion test of a scene with masks.
+    #[inline(always)]
+    pub(crate) fn blocks_seen(&self, ray: &Ray, i: usize, t_max: f32) -> bool {
+        self.hit(ray, i, t_max)
+            .is_some_and(|(t, u, v)| self.seen(ray, i, u, v, t))
+    }
+
     /// Closest hit along the ray, if any.
     #[inline(always)]
     pub fn intersect(&self, ray: &Ray) -> Option<Interaction> {
@@ -477,10 +485,9 @@ impl Scene {
     #[inline(always)]
     fn occluded_prims(&self, ray: &Ray, t_max: f32) -> bool {
         if self.masked {
-            return self.bvh.occluded(ray, t_max, |i, t_max| {
-                self.hit(ray, i, t_max)
-                    .is_some_and(|(t, u, v)| self.seen(ray, i, u, v, t))
-            });
+            return self
+                .bvh
+                .occluded(ray, t_max, |i, t_max| self.blocks_seen(ray, i, t_max));
         }
         #[cfg(target_arch = "x86_64")]
         if let Some(f) = &self.flat {
@@ -574,9 +581,10 @@ impl Scene {
             self.bvh.occluded_origins(&o, &pk, all, lanes, |i, m| {
                 crate::simd::lanes_of(m).fold(0, |hits, k| {
                     let (ray, t) = (&rays[k], t_max[k]);
-                    let blocks = match self.hit(ray, i, t) {
-                        Some((t, u, v)) => !self.masked || self.seen(ray, i, u, v, t),
-                        None => false,
+                    let blocks = if self.masked {
+                        self.blocks_seen(ray, i, t)
+                    } else {
+                        self.hit(ray, i, t).is_some()
                     };
                     hits | (blocks as u32) << k
                 })
@@ -605,11 +613,7 @@ impl Scene {
         // SAFETY: the BVH's leaves name primitives below tris.len() (Scene::build).
         let [a, b, c] = unsafe { *self.tris.get_unchecked(i) };
         if self.masked && self.has_opacity(i) {
-            return each(lanes, &|l| {
-                let ray = pk.ray(l);
-                self.hit(&ray, i, pk.t_max[l])
-                    .is_some_and(|(t, u, v)| self.seen(&ray, i, u, v, t))
-            });
+            return each(lanes, &|l| self.blocks_seen(&pk.ray(l), i, pk.t_max[l]));
         }
         if lanes & (lanes - 1) == 0 {
             return each(lanes, &|l| self.hit(&pk.ray(l), i, pk.t_max[l]).is_some());

@@ -154,11 +154,7 @@ impl Scene {
             self.bvh.occluded_stream::<K>(
                 rays,
                 t_max,
-                |k, i, t| {
-                    let ray = &rays[k];
-                    self.hit(ray, i, t)
-                        .is_some_and(|(t, u, v)| self.seen(ray, i, u, v, t))
-                },
+                |k, i, t| self.blocks_seen(&rays[k], i, t),
                 leaf,
                 done,
             );
