@@ -22,11 +22,13 @@ and render it with the same resolution, samples per pixel, path length and threa
    renders the base spp too; with each sampler whose time projected to the target (RMSE ∝
    1/√spp) is within a third of the best projection, it searches the fewest spp that reach
    that RMSE (a first guess from the projection, steps of an eighth, then bisection to a
-   32nd; at most 32 times the base spp); its time is that render's. The ratio takes mcrt's
-   faster sampler.
+   32nd; at most 32 times the base spp). The ratio takes mcrt's faster sampler, and each
+   side's time is the fastest of --error-runs renders (3) at its spp, made in turns with
+   the other's (the fixed seeds give the same image, so the same error, every time).
 
 usage: .venv/bin/python bench/side_by_side.py [--quick] [--threads N] [--scenes a,b,...]
                                                [--max-isa avx2] [--rate-runs N]
+                                               [--error-runs N]
        .venv/bin/python bench/side_by_side.py --validate SPP   (image means of both, no timing)
 --max-isa avx2 times both renderers as an AVX2 host runs them, on an AVX-512 host: mcrt with
 MCRT_MAX_ISA=avx2 (no AVX-512 kernel), Mitsuba's Dr.Jit generating code for znver3 (AVX2, eight
@@ -274,6 +276,28 @@ def mcrt_equal_error(name, src, sampler, target, base, threads):
     return found
 
 
+def equal_error_times(name, src, mc, mi_, n, threads):
+    """The two times of the equal-error column, each the fastest of N renders made in turns
+    (as the rate test's; the images, and so the errors, are the same every time: fixed
+    seeds). MC is mcrt's (sampler, spp, seconds) that reached the target, MI_ Mitsuba's
+    (variant, sampler, spp, seconds) that set it. Returns (mcrt s, Mitsuba s, every time)."""
+    mc_s, mc_spp, mc_t = mc
+    variant, mi_s, mi_spp, mi_t = mi_
+    times = {"mcrt": [mc_t], "mitsuba": [mi_t]}
+    if n > 1:
+        mc_xml = scene_xml(f"{name}-mcrt-{mc_s}", src, ERR_RES, mc_spp, mc_s)
+        mi_xml = scene_xml(f"{name}-mi-{mi_s}", src, ERR_RES, mi_spp, mi_s)
+        _, timed = mitsuba_renderer(variant, mi_xml, SEED_ERR)
+        for _ in range(n - 1):
+            times["mcrt"].append(mcrt_render(mc_xml, mc_s, SEED_ERR, threads)[0])
+            times["mitsuba"].append(timed()[0])
+    print(f"  equal error, fastest of {n} (slowest/fastest): mcrt {mc_s} {mc_spp} spp "
+          f"{min(times['mcrt']):.2f} s ({max(times['mcrt']) / min(times['mcrt']):.2f}), "
+          f"Mitsuba {mi_s} {mi_spp} spp {min(times['mitsuba']):.2f} s "
+          f"({max(times['mitsuba']) / min(times['mitsuba']):.2f})", flush=True)
+    return min(times["mcrt"]), min(times["mitsuba"]), times
+
+
 REF = {}
 
 
@@ -348,6 +372,9 @@ def main():
     ap.add_argument("--no-build", action="store_true", help="do not run cargo build --release")
     ap.add_argument("--rate-runs", type=int, default=3, help="renders of the rate test a "
                     "renderer, taking turns; each renderer's fastest counts (default 3)")
+    ap.add_argument("--error-runs", type=int, default=3, help="renders of each renderer at "
+                    "its equal-error sample count, taking turns; each one's fastest counts "
+                    "(default 3)")
     ap.add_argument("--validate", type=int, metavar="SPP", help="instead of timing, compare "
                     "the two renderers' image means at --validate-res² with SPP samples")
     ap.add_argument("--validate-res", type=int, default=64)
@@ -356,8 +383,8 @@ def main():
     ap.add_argument("--max-isa", choices=["avx2"], help="time both renderers as an AVX2 host "
                     "runs them (see the module's documentation)")
     a = ap.parse_args()
-    if a.rate_runs < 1:
-        ap.error("--rate-runs must be at least 1")
+    if a.rate_runs < 1 or a.error_runs < 1:
+        ap.error("--rate-runs and --error-runs must be at least 1")
     a.json = a.json or os.path.join(
         OUT, f"side-by-side{'-' + a.max_isa if a.max_isa else ''}.json")
     names = [n for n in a.scenes.split(",") if n]
@@ -466,7 +493,12 @@ def main():
         reached = [s for s in MCRT_SAMPLERS if err["mcrt"][s]["equal error"]]
         if reached:
             mc_s = min(reached, key=lambda s: err["mcrt"][s]["equal error"]["s"])
-            r["time ratio"] = err["mcrt"][mc_s]["equal error"]["s"] / t_mi
+            eq = err["mcrt"][mc_s]["equal error"]
+            t_mc, t_mi, runs = equal_error_times(
+                name, src, (mc_s, eq["spp"], eq["s"]), (best_v, mi_s, base_spp, t_mi),
+                a.error_runs, a.threads)
+            err["equal error runs s"] = runs
+            r["time ratio"] = t_mc / t_mi
             r["samplers"] = (mc_s, mi_s)
     with open(a.json, "w") as f:
         json.dump(results, f, indent=1)
