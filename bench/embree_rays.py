@@ -11,6 +11,14 @@ direction, end distance) it prints ns a ray for `ray_intersect_preliminary` (Emb
 hit alone), `ray_intersect` (with the surface interaction) and `ray_test` (occlusion), the
 minimum over the rounds, each evaluated (Dr.Jit is lazy) after an untimed warm-up that compiles
 its kernel; and how many rays hit, to check that both renderers saw the same scene.
+
+--single N --set NAME: instead, N of NAME's rays, evenly spaced through the file, one at a
+time through `scalar_rgb` (Embree's `rtcIntersect1`, as a single ray), untimed, for
+callgrind, which counts Embree's instructions a ray:
+    valgrind --tool=callgrind --branch-sim=yes python bench/embree_rays.py SCENE.xml DIR
+        --single 20000 --set first
+and read the inclusive count of `BVHNIntersector1<...>::intersect` (valgrind has no AVX-512,
+so Embree runs its AVX2 kernels, as mcrt does under `MCRT_MAX_ISA=avx2`).
 """
 import argparse
 import glob
@@ -49,7 +57,12 @@ def main():
                     help="trace each sixteen consecutive rays N times over (warm caches)")
     ap.add_argument("--shuffle", action="store_true",
                     help="trace the rays in a random order (fixed seed), not as written")
+    ap.add_argument("--single", type=int, metavar="N",
+                    help="trace N rays of --set one at a time through scalar_rgb, untimed")
+    ap.add_argument("--set", default="first", choices=["camera", "bounces", "first"])
     a = ap.parse_args()
+    if a.single:
+        return single(a)
     mi.set_variant("llvm_ad_rgb")
     dr.set_thread_count(a.threads)
     scene = mi.load_file(os.path.abspath(a.scene))
@@ -75,6 +88,20 @@ def main():
         hits = int(dr.count(dr.isfinite(pi))[0])
         print(f"{name}: {n} rays ({hits} hit), ray_intersect_preliminary {tp * 1e9 / n:.1f} "
               f"ns/ray, ray_intersect {ts * 1e9 / n:.1f} ns/ray")
+
+
+def single(a):
+    """N rays of a set, evenly spaced, each through `rtcIntersect1` (see the module's
+    documentation); prints how many hit."""
+    mi.set_variant("scalar_rgb")
+    scene = mi.load_file(os.path.abspath(a.scene))
+    stem = os.path.splitext(os.path.basename(a.scene))[0]
+    raw = np.fromfile(os.path.join(a.dir, f"{stem}-{a.set}.f32"), dtype="<f4").reshape(-1, 7)
+    raw = raw[::max(1, len(raw) // a.single)][:a.single]
+    rays = [mi.Ray3f(mi.Point3f(*map(float, x[:3])), mi.Vector3f(*map(float, x[3:6])),
+                     float(x[6])) for x in raw]
+    hits = sum(bool(scene.ray_intersect_preliminary(r).is_valid()) for r in rays)
+    print(f"{a.set}: {len(rays)} rays one at a time ({hits} hit)")
 
 
 if __name__ == "__main__":
