@@ -23,6 +23,7 @@ so Embree runs its AVX2 kernels, as mcrt does under `MCRT_MAX_ISA=avx2`).
 import argparse
 import glob
 import os
+import sys
 import time
 
 for _llvm in sorted(glob.glob("/usr/lib/*/libLLVM.so.19*"))[:1]:
@@ -59,9 +60,12 @@ def main():
                     help="trace the rays in a random order (fixed seed), not as written")
     ap.add_argument("--single", type=int, metavar="N",
                     help="trace N rays of --set one at a time through scalar_rgb, untimed")
-    ap.add_argument("--set", default="first", choices=["camera", "bounces", "first"])
+    ap.add_argument("--set", default="first", choices=["camera", "bounces", "first"],
+                    help="the set --single traces (default first)")
     a = ap.parse_args()
-    if a.single:
+    if a.single is not None:
+        if a.single < 1:
+            ap.error("--single must be at least 1")
         return single(a)
     mi.set_variant("llvm_ad_rgb")
     dr.set_thread_count(a.threads)
@@ -96,7 +100,12 @@ def single(a):
     mi.set_variant("scalar_rgb")
     scene = mi.load_file(os.path.abspath(a.scene))
     stem = os.path.splitext(os.path.basename(a.scene))[0]
-    raw = np.fromfile(os.path.join(a.dir, f"{stem}-{a.set}.f32"), dtype="<f4").reshape(-1, 7)
+    path = os.path.join(a.dir, f"{stem}-{a.set}.f32")
+    if not os.path.isfile(path):
+        print(f"{path}: no such file (write it with intersect_many's --dump {a.dir})",
+              file=sys.stderr)
+        sys.exit(2)
+    raw = np.fromfile(path, dtype="<f4").reshape(-1, 7)
     raw = raw[::max(1, len(raw) // a.single)][:a.single]
     rays = [mi.Ray3f(mi.Point3f(*map(float, x[:3])), mi.Vector3f(*map(float, x[3:6])),
                      float(x[6])) for x in raw]
