@@ -205,7 +205,14 @@ fn main() {
                     .and_then(|v| v.parse().ok())
                     .expect("--repeat N")
             }
-            "--set" => only_set = Some(args.next().expect("--set camera|bounces|first")),
+            "--set" => {
+                let name = args.next().expect("--set camera|bounces|first");
+                assert!(
+                    ["camera", "bounces", "first"].contains(&name.as_str()),
+                    "--set {name}: not camera, bounces or first"
+                );
+                only_set = Some(name);
+            }
             "--bunny" => scenes.push(format!("bunny:{}", args.next().expect("--bunny N"))),
             "--bench" => {}
             _ => scenes.push(a),
