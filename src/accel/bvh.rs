@@ -1,5 +1,5 @@
 //! The build stage of the BVH: a binary tree over primitive bounds by the binned surface area
-//! heuristic, collapsed into the 4-wide tree of [`super::wide`] that traversal uses.
+//! heuristic, collapsed into the eight-wide tree of [`super::wide`] that traversal uses.
 //!
 //! Build: Wald, "On fast Construction of SAH-based Bounding Volume Hierarchies", RT 2007
 //! (binning centroids into 16 buckets per axis and sweeping for the cheapest split,
@@ -288,7 +288,7 @@ const SAMPLES: usize = 1 << 10;
 /// Builds the BVH over the primitives `0..n`, whose references `prim` gives (it is asked
 /// for each one several times, and must give the same answer each time): the binary SAH
 /// tree over the primitives themselves, or over clusters of them when there are at least
-/// [`CLUSTER_MIN`], collapsed into the 4-wide tree. Returns that tree and the order of the
+/// [`CLUSTER_MIN`], collapsed into the eight-wide tree. Returns that tree and the order of the
 /// primitives (`order[i]` is the caller's index of the tree's i-th primitive). Marks its
 /// phases in `times`.
 ///
@@ -310,7 +310,7 @@ where
         let bvh = build_sah(&mut refs);
         times.mark("binary SAH tree");
         let wide = WideBvh::from_binary(&bvh);
-        times.mark("4-wide collapse");
+        times.mark("wide collapse");
         (wide, bvh.order)
     }
 }

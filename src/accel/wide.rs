@@ -1,10 +1,16 @@
-//! A 4-wide BVH: the binary SAH tree collapsed so that each node holds the boxes of up to
-//! four children in structure-of-arrays form, tested against a ray in one SIMD pass (glam's
-//! `Vec4` is SSE2 on x86-64 and NEON on AArch64, with a scalar fallback elsewhere).
+//! An eight-wide BVH: the binary SAH tree collapsed so that each node holds the boxes of up
+//! to eight children in structure-of-arrays form, tested against a ray in one pass: one
+//! eight-lane AVX register where the CPU has AVX, else two four-lane passes (glam's `Vec4`:
+//! SSE2 on x86-64, NEON on AArch64, scalar elsewhere), the same operations lane by lane.
 //!
 //! Collapsing follows Wald et al., "Getting Rid of Packets: Efficient SIMD Single-Ray
 //! Traversal using Multi-branching BVHs", RT 2008: a node adopts its children's children,
-//! largest surface area first, until it has four. Leaves stay as in the binary tree.
+//! largest surface area first, until it has eight. Leaves stay as in the binary tree.
+//! Eight, not four, as Embree's `BVH8` for AVX CPUs: a ray visits about half as many nodes,
+//! each one box test of eight children and one stack step. Measured with callgrind on the
+//! bunny box's first-bounce rays (AVX2 code), 453 instructions a closest hit against 575
+//! through four-wide nodes, and a fifth less time a ray on the bunny box and on the gallery
+//! (docs/performance.md).
 
 /// One step of the closest-hit traversal: the box test of node `$cur`'s children (the
 /// nearest entered becomes `$cur`, the others are pushed on `$stack` with their entry
@@ -36,9 +42,8 @@ macro_rules! closest_step {
             }
         } else {
             let node = $bvh.node($cur);
-            let (mut mask, tnear) = $r.test(node, $t_max);
+            let (mut mask, t) = $r.test(node, $t_max);
             if mask != 0 {
-                let t = tnear.to_array();
                 let a = lowest(mask);
                 mask &= mask - 1;
                 if !$mixed && mask == 0 {
@@ -49,8 +54,8 @@ macro_rules! closest_step {
                 let b = lowest(mask);
                 mask &= mask.wrapping_sub(1);
                 if mask == 0 {
-                    // One child or two (96 % of the nodes entered): the nearer becomes
-                    // `$cur`, the other (where there is one) is pushed.
+                    // One child or two (96 % of the nodes entered, with four-wide nodes): the
+                    // nearer becomes `$cur`, the other (where there is one) is pushed.
                     if $mixed {
                         let swap = two & !(t[a] <= t[b]);
                         let (near, far) = if swap { (b, a) } else { (a, b) };
@@ -63,27 +68,21 @@ macro_rules! closest_step {
                     $cur = node.child[near];
                     $next
                 }
-                // Three or four: sorted by entry distance, farthest pushed first.
-                let c = lowest(mask);
-                mask &= mask - 1;
-                let four = mask != 0;
-                let d = lowest(mask);
-                let mut k = [
-                    child_key(t[a], node.child[a]),
-                    child_key(t[b], node.child[b]),
-                    child_key(t[c], node.child[c]),
-                    if four {
-                        child_key(t[d], node.child[d])
-                    } else {
-                        u64::MAX
-                    },
-                ];
-                sort4(&mut k);
-                if four {
-                    $stack.push(child_of_key(k[3]));
+                // Three or more: sorted by entry distance, farthest pushed first.
+                let mut k = [u64::MAX; WIDTH];
+                k[0] = child_key(t[a], node.child[a]);
+                k[1] = child_key(t[b], node.child[b]);
+                let mut n = 2;
+                while mask != 0 {
+                    let c = lowest(mask);
+                    mask &= mask - 1;
+                    k[n & (WIDTH - 1)] = child_key(t[c], node.child[c]);
+                    n += 1;
                 }
-                $stack.push(child_of_key(k[2]));
-                $stack.push(child_of_key(k[1]));
+                sort_keys(&mut k, n);
+                for &key in k[1..n].iter().rev() {
+                    $stack.push(child_of_key(key));
+                }
                 $cur = child_of_key(k[0]).0;
                 $next
             }
@@ -108,7 +107,7 @@ macro_rules! closest_step {
 /// (what they read for an empty mask goes unused).
 #[inline(always)]
 fn lowest(mask: u32) -> usize {
-    (mask.trailing_zeros() & 3) as usize
+    (mask.trailing_zeros() & (WIDTH as u32 - 1)) as usize
 }
 
 /// A child and its entry distance as one key that orders as the distance: entry distances
@@ -125,13 +124,38 @@ fn child_of_key(k: u64) -> (ChildRef, f32) {
     (k as u32, f32::from_bits((k >> 32) as u32))
 }
 
-/// Sorts four keys, ascending, by a sorting network (Knuth, TAOCP vol. 3, §5.3.4): five
-/// compare-exchanges, each a compare and two conditional moves, where the insertion sort
-/// it replaces branched on every comparison. (Of equally distant children either order
-/// gives the same closest hit: see `Scene::keep_nearer`.)
+/// Sorts the first `n` keys of `k` (the rest `u64::MAX`), ascending, by a sorting network
+/// (Knuth, TAOCP vol. 3, §5.3.4): each compare-exchange a compare and two conditional
+/// moves, where an insertion sort branched on every comparison. Five of them for four keys
+/// or fewer (most nodes with three entered children), nineteen (Batcher's merge exchange)
+/// for up to eight. (Of equally distant children either order gives the same closest hit:
+/// see `Scene::keep_nearer`.)
 #[inline(always)]
-fn sort4(k: &mut [u64; 4]) {
-    for (i, j) in [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)] {
+fn sort_keys(k: &mut [u64; WIDTH], n: usize) {
+    const FOUR: [(usize, usize); 5] = [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)];
+    const EIGHT: [(usize, usize); 19] = [
+        (0, 1),
+        (2, 3),
+        (4, 5),
+        (6, 7),
+        (0, 2),
+        (1, 3),
+        (4, 6),
+        (5, 7),
+        (1, 2),
+        (5, 6),
+        (0, 4),
+        (3, 7),
+        (1, 5),
+        (2, 6),
+        (1, 4),
+        (3, 6),
+        (2, 4),
+        (3, 5),
+        (3, 4),
+    ];
+    let pairs: &[(usize, usize)] = if n <= 4 { &FOUR } else { &EIGHT };
+    for &(i, j) in pairs {
         let (lo, hi) = (k[i].min(k[j]), k[i].max(k[j]));
         k[i] = lo;
         k[j] = hi;
@@ -162,10 +186,14 @@ macro_rules! any_step {
                 $cur = node.child[lowest(mask)];
                 mask &= mask - 1;
                 if $mixed {
-                    let m2 = mask & mask.wrapping_sub(1);
-                    let m3 = m2 & m2.wrapping_sub(1);
-                    let n = (mask != 0) as usize + (m2 != 0) as usize + (m3 != 0) as usize;
-                    $stack.push3([mask, m2, m3].map(|m| node.child[lowest(m)]), n);
+                    // All seven slots written, the entered ones counted.
+                    let n = mask.count_ones() as usize;
+                    let mut rest = [0; WIDTH - 1];
+                    for r in &mut rest {
+                        *r = node.child[lowest(mask)];
+                        mask &= mask.wrapping_sub(1);
+                    }
+                    $stack.push_n(rest, n);
                     $next
                 }
                 while mask != 0 {
@@ -193,6 +221,9 @@ use crate::geometry::{ray::gamma, Aabb, Ray};
 use glam::Vec4;
 pub use packet::{RayPacket, PACKET};
 
+/// Children of a wide node.
+pub(crate) const WIDTH: usize = 8;
+
 /// A child reference: an inner node index, or a leaf (high bit set) packing the first
 /// primitive (27 bits) and the primitive count (4 bits).
 pub(crate) type ChildRef = u32;
@@ -205,23 +236,32 @@ fn leaf_ref(first: u32, count: u32) -> ChildRef {
     LEAF | (first << 4) | count
 }
 
-/// One 4-wide node: 6 × 16 bytes of child bounds and 4 child references (112 bytes).
+/// One wide node: 6 × 32 bytes of child bounds and 8 child references (224 bytes).
 #[derive(Clone, Copy, Debug)]
-#[repr(C, align(16))]
-pub struct Node4 {
-    /// The four children's min x, max x, min y, max y, min z, max z: slab `2·axis` is the
+#[repr(C, align(32))]
+pub struct Node {
+    /// The eight children's min x, max x, min y, max y, min z, max z: slab `2·axis` is the
     /// lower bound, `2·axis + 1` the upper, so a ray picks its near and far slab per axis by
-    /// index (no selects per node).
-    bounds: [Vec4; 6],
-    child: [ChildRef; 4],
+    /// index (no selects per node). An empty slot's box is empty (+∞ to −∞), and no ray
+    /// enters it.
+    bounds: [[f32; WIDTH]; 6],
+    child: [ChildRef; WIDTH],
 }
 
-impl Node4 {
+impl Node {
+    /// A node with every slot empty.
+    fn empty() -> Node {
+        let (lo, hi) = ([f32::INFINITY; WIDTH], [f32::NEG_INFINITY; WIDTH]);
+        Node {
+            bounds: [lo, hi, lo, hi, lo, hi],
+            child: [EMPTY; WIDTH],
+        }
+    }
     /// This node as it lies in a tree whose nodes were collapsed on their own, counted from
     /// 0, and then placed from index `base` on: its inner children's references moved by
     /// `base`.
     #[inline]
-    pub(crate) fn rebased(mut self, base: u32) -> Node4 {
+    pub(crate) fn rebased(mut self, base: u32) -> Node {
         for c in &mut self.child {
             *c = rebased(*c, base);
         }
@@ -245,24 +285,28 @@ pub(crate) fn rebased(r: ChildRef, base: u32) -> ChildRef {
 
 #[derive(Clone, Debug, Default)]
 pub struct WideBvh {
-    nodes: Vec<Node4>,
+    nodes: Vec<Node>,
     /// The root: an inner node, a single leaf, or EMPTY.
     root: ChildRef,
     bounds: Option<Aabb>,
 }
 
-/// Fringe merging (a subtree with at most three leaves, whose own wide node would be
-/// underfull, becomes one leaf): only in trees over at least `MERGE_MIN_PRIMS` primitives,
-/// only for at most `MERGE_MAX` primitives, none of them costly to test (spheres), and only
-/// where the subtree's surface area is below `MERGE_AREA` times the root's per primitive.
-/// A merged leaf costs a test of each of its primitives where the wide node it replaces
-/// cost one box test and tests of the primitives whose boxes the ray enters. It is what
-/// brings the subdivided bunny's nodes from 49 to about 21 bytes a triangle (the memory
-/// target); measured with callgrind it costs the 92 k-triangle bunny 5 % of its render
-/// instructions (wall time within noise, the tree being 2.3× smaller), and would cost the
-/// TNCG15 room, whose floor and ceiling fans it merges, 33 % (hence the size limits).
+/// Fringe merging (a subtree with at most `MERGE_LEAVES` leaves, whose own wide node would
+/// be underfull, becomes one leaf): only in trees over at least `MERGE_MIN_PRIMS`
+/// primitives, only for at most `MERGE_MAX` primitives, none of them costly to test
+/// (spheres), and only where the subtree's surface area is below `MERGE_AREA` times the
+/// root's per primitive. A merged leaf costs a test of each of its primitives where the wide
+/// node it replaces cost one box test and tests of the primitives whose boxes the ray
+/// enters. It keeps the tree within the memory target: with four-wide nodes it merged up to
+/// four primitives in up to three leaves, and cost the 92 k-triangle bunny 5 % of its render
+/// instructions (callgrind; wall time within noise, the tree 2.3× smaller); with eight-wide
+/// nodes those limits left the subdivided bunny at 59–65 bytes a triangle in all (`cargo
+/// bench --bench scale`, 15 k to 10 M triangles), six primitives in five leaves at 51–59,
+/// at the same render rates (eight in seven: 50–57, 1–5 % slower). It would cost the TNCG15
+/// room, whose floor and ceiling fans it merges, 33 % (hence the size limits).
 const MERGE_MIN_PRIMS: usize = 4096;
-pub(crate) const MERGE_MAX: u32 = 4;
+pub(crate) const MERGE_MAX: u32 = 6;
+const MERGE_LEAVES: u32 = 5;
 const MERGE_AREA: f32 = 12.0;
 
 /// The weight of fringe merging in a tree over `n` primitives within `root` (0: none).
@@ -280,7 +324,7 @@ pub(crate) fn merge_weight(n: usize, root: &Aabb) -> f32 {
 pub(crate) fn merges(prims: u32, leaves: u32, costly: bool, bounds: &Aabb, weight: f32) -> bool {
     weight != 0.0
         && prims <= MERGE_MAX
-        && leaves <= 3
+        && leaves <= MERGE_LEAVES
         && !costly
         && bounds.surface_area() * weight < 1.0
 }
@@ -299,7 +343,7 @@ pub(crate) struct Collapse<'a> {
 /// output), the slot, and the stub's binary node.
 pub(crate) type External = (usize, usize, usize);
 
-/// [`ArrayVec4`]'s mark for a child that is a leaf of the wide tree; inner children carry
+/// [`Kids`]' mark for a child that is a leaf of the wide tree; inner children carry
 /// their surface area.
 const LEAF_KID: f32 = -1.0;
 
@@ -326,7 +370,7 @@ impl WideBvh {
     }
 
     /// The tree of `nodes`, its root `root` (a node's index, or a leaf), within `bounds`.
-    pub(crate) fn from_parts(nodes: Vec<Node4>, root: ChildRef, bounds: Aabb) -> WideBvh {
+    pub(crate) fn from_parts(nodes: Vec<Node>, root: ChildRef, bounds: Aabb) -> WideBvh {
         WideBvh {
             nodes,
             root,
@@ -337,7 +381,7 @@ impl WideBvh {
     /// Inner node `i`, without a bounds check: inner child references are made by the
     /// collapse (`subtree`) and always name a node of `nodes`.
     #[inline(always)]
-    fn node(&self, i: ChildRef) -> &Node4 {
+    fn node(&self, i: ChildRef) -> &Node {
         debug_assert!((i as usize) < self.nodes.len());
         // SAFETY: see above; `nodes` is never shrunk after the build.
         unsafe { self.nodes.get_unchecked(i as usize) }
@@ -345,7 +389,7 @@ impl WideBvh {
 
     /// Bytes of the nodes.
     pub fn memory_bytes(&self) -> usize {
-        self.nodes.len() * std::mem::size_of::<Node4>()
+        self.nodes.len() * std::mem::size_of::<Node>()
     }
 
     pub fn bounds(&self) -> Option<Aabb> {
@@ -353,7 +397,7 @@ impl WideBvh {
     }
 
     /// The tree's expected cost for a ray that meets its root, by the surface area heuristic
-    /// (MacDonald and Booth 1990): the surface area of each wide node (one four-box test)
+    /// (MacDonald and Booth 1990): the surface area of each wide node (one eight-box test)
     /// and of each leaf times its primitives, over the root's. A measure of tree quality
     /// that does not depend on timing; the `scale` benchmark prints it.
     pub fn sah_cost(&self) -> f64 {
@@ -371,7 +415,7 @@ impl WideBvh {
             }
             cost += a;
             let n = self.node(c);
-            for slot in 0..4 {
+            for slot in 0..WIDTH {
                 let b = Aabb {
                     min: glam::Vec3A::new(n.bounds[0][slot], n.bounds[2][slot], n.bounds[4][slot]),
                     max: glam::Vec3A::new(n.bounds[1][slot], n.bounds[3][slot], n.bounds[5][slot]),
@@ -474,8 +518,8 @@ impl<'a> Collapse<'a> {
         self.wanted.into_inner()
     }
 
-    /// Whether inner node `k` becomes a leaf: it has at most three leaves under it (its own
-    /// wide node would be underfull), at most `MERGE_MAX` primitives, none costly (see
+    /// Whether inner node `k` becomes a leaf: it has at most `MERGE_LEAVES` leaves under it
+    /// (its own wide node would be underfull), at most `MERGE_MAX` primitives, none costly (see
     /// `bvh::build`), and a small surface area. (The build records the leaves and the
     /// costly primitive in the node, so only it is read.)
     fn fringe(&self, k: usize) -> bool {
@@ -496,7 +540,7 @@ impl<'a> Collapse<'a> {
     pub(crate) fn subtree(
         &self,
         i: usize,
-        out: &mut Vec<Node4>,
+        out: &mut Vec<Node>,
         ext: &mut Vec<External>,
     ) -> ChildRef {
         debug_assert!(!self.b.node(i).is_stub());
@@ -510,7 +554,7 @@ impl<'a> Collapse<'a> {
 
     /// Appends the wide node for binary inner node `i` and its subtree to `out` (depth
     /// first, each node before its children); returns its index.
-    fn collapse(&self, i: usize, out: &mut Vec<Node4>, ext: &mut Vec<External>) -> ChildRef {
+    fn collapse(&self, i: usize, out: &mut Vec<Node>, ext: &mut Vec<External>) -> ChildRef {
         let (node, kids) = self.node(i);
         let index = out.len();
         out.push(node);
@@ -530,14 +574,10 @@ impl<'a> Collapse<'a> {
     /// The wide node for binary inner node `i`, its inner children's references left
     /// `EMPTY`, and its children (see [`Self::kids`]).
     #[inline]
-    fn node(&self, i: usize) -> (Node4, ArrayVec4) {
+    fn node(&self, i: usize) -> (Node, Kids) {
         let b = self.b;
-        let ArrayVec4 { kids, len } = self.kids(i);
-        let (lo, hi) = (Vec4::splat(f32::INFINITY), Vec4::splat(f32::NEG_INFINITY));
-        let mut node = Node4 {
-            bounds: [lo, hi, lo, hi, lo, hi],
-            child: [EMPTY; 4],
-        };
+        let Kids { kids, len } = self.kids(i);
+        let mut node = Node::empty();
         for (slot, &(k, area)) in kids[..len].iter().enumerate() {
             let kn = b.node(k);
             for axis in 0..3 {
@@ -549,14 +589,14 @@ impl<'a> Collapse<'a> {
                 node.child[slot] = leaf_ref(first, count);
             }
         }
-        (node, ArrayVec4 { kids, len })
+        (node, Kids { kids, len })
     }
 
     /// The children of the wide node for binary inner node `i`: (binary node, its surface
     /// area, or `LEAF_KID` for a leaf). A stub it would open is listed in `wanted`, and
     /// left as it is.
     #[inline]
-    fn kids(&self, i: usize) -> ArrayVec4 {
+    fn kids(&self, i: usize) -> Kids {
         let b = self.b;
         let kid = |k: usize| {
             let n = b.node(k);
@@ -580,9 +620,10 @@ impl<'a> Collapse<'a> {
                 },
             )
         };
-        let mut kids = [kid(i + 1), kid(b.right(i)), (0, 0.0), (0, 0.0)];
+        let mut kids = [(0, 0.0); WIDTH];
+        (kids[0], kids[1]) = (kid(i + 1), kid(b.right(i)));
         let mut len = 2;
-        while len < 4 {
+        while len < WIDTH {
             // Open the inner child with the largest surface area.
             let mut best = None;
             for (pos, &(_, area)) in kids[..len].iter().enumerate() {
@@ -602,17 +643,17 @@ impl<'a> Collapse<'a> {
             kids[len] = kid(b.right(k));
             len += 1;
         }
-        ArrayVec4 { kids, len }
+        Kids { kids, len }
     }
 }
 
-/// Up to four children of a wide node, as [`Collapse::node`] gives them.
-struct ArrayVec4 {
-    kids: [(usize, f32); 4],
+/// Up to eight children of a wide node, as [`Collapse::node`] gives them.
+struct Kids {
+    kids: [(usize, f32); WIDTH],
     len: usize,
 }
 
-impl ArrayVec4 {
+impl Kids {
     fn iter(&self) -> std::slice::Iter<'_, (usize, f32)> {
         self.kids[..self.len].iter()
     }
@@ -621,9 +662,9 @@ impl ArrayVec4 {
 /// The factor by which a box's exit distance is widened: 1 + 2γ(3) (see `RayBoxes::test`).
 const WIDEN: f32 = 1.0 + 2.0 * gamma(3);
 
-/// A ray prepared for 4-wide slab tests: the origin and inverse direction splatted, and per
-/// axis the byte offset of the near slab in a `Node4` (so no per-box min/max of the two slab
-/// distances is needed).
+/// A ray prepared for the slab tests of a wide node's children: the origin and inverse
+/// direction splatted, and per axis the byte offset of the near slab in a [`Node`] (so no
+/// per-box min/max of the two slab distances is needed).
 #[derive(Clone, Copy)]
 struct RayBoxes {
     o: [Vec4; 3],
@@ -633,11 +674,14 @@ struct RayBoxes {
     /// in memory ([`stream`]) reads each and adds it to the node's address, with no shift.
     near: [usize; 3],
     far: [usize; 3],
+    /// Whether the CPU has AVX, so that [`RayBoxes::test`] takes eight lanes at once.
+    #[cfg(target_arch = "x86_64")]
+    avx: bool,
 }
 
-/// Byte offset of slab `i` in a `Node4`.
+/// Byte offset of slab `i` in a [`Node`].
 const fn slab_offset(i: usize) -> usize {
-    i * std::mem::size_of::<Vec4>()
+    i * std::mem::size_of::<[f32; WIDTH]>()
 }
 
 impl RayBoxes {
@@ -658,35 +702,122 @@ impl RayBoxes {
             near,
             // The other slab of each axis: the index's lowest bit flipped.
             far: near.map(|off| off ^ slab_offset(1)),
+            #[cfg(target_arch = "x86_64")]
+            avx: std::arch::is_x86_feature_detected!("avx"),
         }
     }
 
     /// Bit mask of the children whose boxes the ray enters before `t_max`, and their entry
     /// distances. The exit distance is rounded up by 2γ(3) so that rounding never loses a box
     /// (Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013).
+    ///
+    /// With AVX in one pass of eight lanes. That code is inlined where the caller is compiled
+    /// with AVX (the renderer's x86-64-v3 paths, such as `Scene::closest_v3`) and called
+    /// elsewhere; both forms compute the same operations lane by lane, so the same bits.
     #[inline(always)]
-    fn test(&self, n: &Node4, t_max: f32) -> (u32, Vec4) {
-        let slab = |off: usize| {
-            debug_assert!(off < std::mem::size_of_val(&n.bounds) && off.is_multiple_of(16));
-            // SAFETY: `near` and `far` hold the offsets of slabs 0 to 5, set in `new`; a
-            // `Node4` and its `bounds` (its first field, `repr(C)`) are 16-byte aligned.
-            unsafe { *((n.bounds.as_ptr() as *const u8).add(off) as *const Vec4) }
-        };
-        let tn_x = (slab(self.near[0]) - self.o[0]) * self.inv[0];
-        let tn_y = (slab(self.near[1]) - self.o[1]) * self.inv[1];
-        let tn_z = (slab(self.near[2]) - self.o[2]) * self.inv[2];
-        let tf_x = (slab(self.far[0]) - self.o[0]) * self.inv[0];
-        let tf_y = (slab(self.far[1]) - self.o[1]) * self.inv[1];
-        let tf_z = (slab(self.far[2]) - self.o[2]) * self.inv[2];
-        let tnear = tn_x.max(tn_y).max(tn_z).max(Vec4::ZERO);
-        let tfar = tf_x.min(tf_y).min(tf_z).min(Vec4::splat(t_max)) * WIDEN;
-        (tnear.cmple(tfar).bitmask(), tnear)
+    fn test(&self, n: &Node, t_max: f32) -> (u32, [f32; WIDTH]) {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx {
+            // SAFETY: `avx` says the CPU has AVX.
+            return unsafe { self.test_avx(n, t_max) };
+        }
+        let mut mask = 0;
+        let mut t = [0.0; WIDTH];
+        for half in 0..WIDTH / 4 {
+            let slab = |off: usize| {
+                let off = off + 16 * half;
+                debug_assert!(off < std::mem::size_of_val(&n.bounds) && off.is_multiple_of(16));
+                // SAFETY: `near` and `far` hold the offsets of slabs 0 to 5, set in `new`,
+                // and `half` is below 2; a `Node` and its `bounds` (its first field,
+                // `repr(C)`) are 32-byte aligned.
+                unsafe { *((n.bounds.as_ptr() as *const u8).add(off) as *const Vec4) }
+            };
+            let tn_x = (slab(self.near[0]) - self.o[0]) * self.inv[0];
+            let tn_y = (slab(self.near[1]) - self.o[1]) * self.inv[1];
+            let tn_z = (slab(self.near[2]) - self.o[2]) * self.inv[2];
+            let tf_x = (slab(self.far[0]) - self.o[0]) * self.inv[0];
+            let tf_y = (slab(self.far[1]) - self.o[1]) * self.inv[1];
+            let tf_z = (slab(self.far[2]) - self.o[2]) * self.inv[2];
+            let tnear = tn_x.max(tn_y).max(tn_z).max(Vec4::ZERO);
+            let tfar = tf_x.min(tf_y).min(tf_z).min(Vec4::splat(t_max)) * WIDEN;
+            mask |= tnear.cmple(tfar).bitmask() << (4 * half);
+            t[4 * half..4 * half + 4].copy_from_slice(&tnear.to_array());
+        }
+        (mask, t)
+    }
+
+    /// [`RayBoxes::test`] in one pass of eight AVX lanes: the same operations in the same
+    /// order as the two four-lane passes (and as the packets' box tests, `wide::packet`).
+    ///
+    /// # Safety
+    /// The CPU must have AVX.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    #[inline]
+    unsafe fn test_avx(&self, n: &Node, t_max: f32) -> (u32, [f32; WIDTH]) {
+        use std::arch::x86_64::*;
+        let base = n.bounds.as_ptr() as *const u8;
+        // (Written out, not as a closure: a closure is not compiled with this function's
+        // features, and its intrinsics would become calls.)
+        let o = [
+            _mm256_broadcast_ss(&self.o[0].x),
+            _mm256_broadcast_ss(&self.o[1].x),
+            _mm256_broadcast_ss(&self.o[2].x),
+        ];
+        let inv = [
+            _mm256_broadcast_ss(&self.inv[0].x),
+            _mm256_broadcast_ss(&self.inv[1].x),
+            _mm256_broadcast_ss(&self.inv[2].x),
+        ];
+        // SAFETY (every load): `near` and `far` hold the offsets of slabs 0 to 5, set in
+        // `new`; a `Node` and its `bounds` are 32-byte aligned.
+        let tn_x = _mm256_mul_ps(
+            _mm256_sub_ps(_mm256_load_ps(base.add(self.near[0]) as *const f32), o[0]),
+            inv[0],
+        );
+        let tn_y = _mm256_mul_ps(
+            _mm256_sub_ps(_mm256_load_ps(base.add(self.near[1]) as *const f32), o[1]),
+            inv[1],
+        );
+        let tn_z = _mm256_mul_ps(
+            _mm256_sub_ps(_mm256_load_ps(base.add(self.near[2]) as *const f32), o[2]),
+            inv[2],
+        );
+        let tf_x = _mm256_mul_ps(
+            _mm256_sub_ps(_mm256_load_ps(base.add(self.far[0]) as *const f32), o[0]),
+            inv[0],
+        );
+        let tf_y = _mm256_mul_ps(
+            _mm256_sub_ps(_mm256_load_ps(base.add(self.far[1]) as *const f32), o[1]),
+            inv[1],
+        );
+        let tf_z = _mm256_mul_ps(
+            _mm256_sub_ps(_mm256_load_ps(base.add(self.far[2]) as *const f32), o[2]),
+            inv[2],
+        );
+        // The operand order of the four-lane passes (max and min return the second operand
+        // where either is NaN, in SSE and AVX alike).
+        let tnear = _mm256_max_ps(
+            _mm256_max_ps(_mm256_max_ps(tn_x, tn_y), tn_z),
+            _mm256_setzero_ps(),
+        );
+        let tfar = _mm256_mul_ps(
+            _mm256_min_ps(
+                _mm256_min_ps(_mm256_min_ps(tf_x, tf_y), tf_z),
+                _mm256_set1_ps(t_max),
+            ),
+            _mm256_set1_ps(WIDEN),
+        );
+        let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tnear, tfar)) as u32;
+        let mut t = [0.0; WIDTH];
+        _mm256_storeu_ps(t.as_mut_ptr(), tnear);
+        (mask, t)
     }
 }
 
 /// The traversal stack (of child references, with their entry distances for the closest
 /// hit). The binary tree is at most `bvh::MAX_DEPTH` deep, so a wide node path is too, and
-/// each level leaves at most three siblings behind: 3 × MAX_DEPTH entries suffice. Left
+/// each level leaves at most seven siblings behind: 7 × MAX_DEPTH entries suffice. Left
 /// uninitialised: zeroing it cost 4 % of all instructions per ray. This form holds its
 /// items, for the traversals in flight of [`stream`]; a single ray's loop has a
 /// [`LocalStack`].
@@ -698,7 +829,7 @@ struct Stack<T: Copy> {
 /// The items of a traversal stack.
 type Items<T> = [std::mem::MaybeUninit<T>; STACK];
 
-const STACK: usize = 3 * super::bvh::MAX_DEPTH;
+const STACK: usize = (WIDTH - 1) * super::bvh::MAX_DEPTH;
 
 impl<T: Copy> Stack<T> {
     #[inline(always)]
@@ -710,7 +841,7 @@ impl<T: Copy> Stack<T> {
         push_n(&mut self.items, &mut self.len, [v], keep as usize);
     }
     #[inline(always)]
-    fn push3(&mut self, v: [T; 3], n: usize) {
+    fn push_n<const N: usize>(&mut self, v: [T; N], n: usize) {
         push_n(&mut self.items, &mut self.len, v, n);
     }
     #[inline(always)]
@@ -743,7 +874,7 @@ impl<'a, T: Copy> LocalStack<'a, T> {
         push_n(self.items, &mut self.len, [v], keep as usize);
     }
     #[inline(always)]
-    fn push3(&mut self, v: [T; 3], n: usize) {
+    fn push_n<const N: usize>(&mut self, v: [T; N], n: usize) {
         push_n(self.items, &mut self.len, v, n);
     }
     #[inline(always)]
@@ -754,8 +885,8 @@ impl<'a, T: Copy> LocalStack<'a, T> {
 
 /// Pushes the first `n` of `v` (`n` ≤ N) on the stack of `items` below `len`, without a
 /// branch on `n`: all N are written, those past the first `n` above the new top, where the
-/// next push overwrites them. There is room: a node is opened with at most three entries
-/// for each level above it on the stack, so below 3 × (MAX_DEPTH − 1), and N ≤ 3.
+/// next push overwrites them. There is room: a node is opened with at most seven entries
+/// for each level above it on the stack, so below 7 × (MAX_DEPTH − 1), and N ≤ 7.
 #[inline(always)]
 fn push_n<T: Copy, const N: usize>(items: &mut Items<T>, len: &mut usize, v: [T; N], n: usize) {
     debug_assert!(n <= N);
@@ -818,7 +949,7 @@ impl WideBvh {
             reached[i] = true;
             let n = &self.nodes[i];
             let mut kids = 0;
-            for slot in 0..4 {
+            for slot in 0..WIDTH {
                 if n.child[slot] == EMPTY {
                     continue;
                 }
@@ -842,10 +973,111 @@ impl WideBvh {
         let mut bits = Vec::new();
         for n in &self.nodes {
             for v in &n.bounds {
-                bits.extend(v.to_array().map(f32::to_bits));
+                bits.extend(v.map(f32::to_bits));
             }
             bits.extend(n.child);
         }
         (bits, self.root)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `sort_keys` sorts every count of keys from 0 to 8: by the 0-1 principle (Knuth, TAOCP
+    /// vol. 3, §5.3.4, exercise 6) a comparator network that sorts every sequence of zeros and
+    /// ones sorts every sequence; here each 0-1 sequence of length n, padded with `u64::MAX`.
+    #[test]
+    fn sort_keys_sorts_every_count() {
+        for n in 0..=WIDTH {
+            for bits in 0u32..1 << n {
+                let mut k = [u64::MAX; WIDTH];
+                for (i, key) in k[..n].iter_mut().enumerate() {
+                    *key = u64::from(bits >> i & 1);
+                }
+                let mut want = k;
+                want.sort_unstable();
+                sort_keys(&mut k, n);
+                assert_eq!(k, want, "{n} keys {bits:b}");
+            }
+        }
+    }
+
+    /// The box test's two forms, eight AVX lanes and two four-lane passes (what CPUs
+    /// without AVX run), give the same mask and entry distances, bit for bit, on random
+    /// boxes (some slots empty, some boxes flat) and rays (some parallel to an axis, with
+    /// +0 or −0 components), and the same as each box tested on its own in scalar code.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn box_test_forms_agree() {
+        if !std::arch::is_x86_feature_detected!("avx") {
+            return;
+        }
+        let mut state = 7u64;
+        let mut next = || {
+            state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            (crate::sampler::mix64(state) >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mut entered = 0;
+        for _ in 0..4000 {
+            let mut node = Node::empty();
+            for slot in 0..WIDTH {
+                if next() < 0.15 {
+                    continue;
+                }
+                for axis in 0..3 {
+                    let a = next() * 4.0 - 2.0;
+                    let w = if next() < 0.1 { 0.0 } else { next() * 2.0 };
+                    node.bounds[2 * axis][slot] = a;
+                    node.bounds[2 * axis + 1][slot] = a + w;
+                }
+            }
+            let o = glam::Vec3A::new(next(), next(), next()) * 6.0 - 3.0;
+            // Towards a point among the boxes, some components zero.
+            let mut d = (glam::Vec3A::new(next(), next(), next()) * 2.0 - 1.0 - o).to_array();
+            for v in &mut d {
+                match (next() * 10.0) as u32 {
+                    0 => *v = 0.0,
+                    1 => *v = -0.0,
+                    _ => {}
+                }
+            }
+            let d = glam::Vec3A::from(d);
+            let ray = Ray::new(o, d);
+            let t_max = if next() < 0.5 {
+                f32::INFINITY
+            } else {
+                next() * 5.0
+            };
+            let mut r = RayBoxes::new(&ray);
+            // SAFETY: checked above.
+            let wide = unsafe { r.test_avx(&node, t_max) };
+            r.avx = false;
+            let halves = r.test(&node, t_max);
+            assert_eq!(wide.0, halves.0);
+            assert_eq!(wide.1.map(f32::to_bits), halves.1.map(f32::to_bits));
+            let inv = ray.d.recip();
+            for slot in 0..WIDTH {
+                // As `maxps`/`minps`: the second operand where either is NaN.
+                let max = |a: f32, b: f32| if a > b { a } else { b };
+                let min = |a: f32, b: f32| if a < b { a } else { b };
+                let (mut tn, mut tf) = ([0.0f32; 3], [0.0f32; 3]);
+                for axis in 0..3 {
+                    let (lo, hi) = (node.bounds[2 * axis][slot], node.bounds[2 * axis + 1][slot]);
+                    let (o, i) = (ray.o[axis], inv[axis]);
+                    let (near, far) = if i < 0.0 { (hi, lo) } else { (lo, hi) };
+                    tn[axis] = (near - o) * i;
+                    tf[axis] = (far - o) * i;
+                }
+                let tn = max(max(max(tn[0], tn[1]), tn[2]), 0.0);
+                let tf = min(min(min(tf[0], tf[1]), tf[2]), t_max) * WIDEN;
+                let enters = tn <= tf;
+                assert_eq!(wide.1[slot].to_bits(), tn.to_bits(), "slot {slot}");
+                assert_eq!(wide.0 >> slot & 1 == 1, enters, "slot {slot}");
+                entered += enters as u32;
+            }
+        }
+        assert!(entered > 1000, "{entered} boxes entered");
     }
 }

@@ -236,9 +236,37 @@ impl Placed {
 impl Instances {
     /// The closest hit along `ray`: an instance's nearer than `own` (the scene's own
     /// primitives' closest, [`Scene::closest`]), else `own`'s. (Not inlined, here and
-    /// below: the callers' code stays as small as without instances.)
+    /// below: the callers' code stays as small as without instances.) Compiled for
+    /// x86-64-v3 where the CPU has it, as `Scene::intersect_many` is, so that the trees' box
+    /// tests take their eight-lane AVX form inline.
     #[inline(never)]
     pub(super) fn intersect(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        own: Option<(usize, f32, f32, f32)>,
+    ) -> Option<Interaction> {
+        #[cfg(target_arch = "x86_64")]
+        if crate::integrator::has_x86_64_v3() {
+            // SAFETY: the CPU has the features, checked just above.
+            return unsafe { self.intersect_v3(scene, ray, own) };
+        }
+        self.intersect_here(scene, ray, own)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
+    unsafe fn intersect_v3(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        own: Option<(usize, f32, f32, f32)>,
+    ) -> Option<Interaction> {
+        self.intersect_here(scene, ray, own)
+    }
+
+    #[inline(always)]
+    fn intersect_here(
         &self,
         scene: &Scene,
         ray: &Ray,
@@ -255,18 +283,24 @@ impl Instances {
     }
 
     /// The closest instance hit strictly before `t_max`.
+    #[inline(always)]
     fn closest(&self, ray: &Ray, t_max: f32) -> Option<Interaction> {
         // (instance, primitive, u, v, t) of the nearest so far.
         let mut best: Option<(usize, usize, f32, f32, f32)> = None;
-        self.tlas.intersect(ray, t_max, |k, t_max| {
-            let inst = &self.placed[k];
-            let group = &self.groups[inst.group as usize].scene;
-            let (i, u, v, t) = group.closest(&inst.ray_in_object_space(ray), t_max)?;
-            (t < t_max).then(|| {
-                best = Some((k, i, u, v, t));
-                t
-            })
-        });
+        self.tlas.intersect(
+            ray,
+            t_max,
+            #[inline(always)]
+            |k, t_max| {
+                let inst = &self.placed[k];
+                let group = &self.groups[inst.group as usize].scene;
+                let (i, u, v, t) = group.closest(&inst.ray_in_object_space(ray), t_max)?;
+                (t < t_max).then(|| {
+                    best = Some((k, i, u, v, t));
+                    t
+                })
+            },
+        );
         let (k, i, u, v, t) = best?;
         let inst = &self.placed[k];
         let group = &self.groups[inst.group as usize];
@@ -276,14 +310,36 @@ impl Instances {
         Some(inst.hit_in_world(si))
     }
 
-    /// Whether an instance blocks `ray` before `t_max`.
+    /// Whether an instance blocks `ray` before `t_max` (for x86-64-v3 where the CPU has it,
+    /// as [`Instances::intersect`]).
     #[inline(never)]
     pub(super) fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
-        self.tlas.occluded(ray, t_max, |k, t_max| {
-            let inst = &self.placed[k];
-            let group = &self.groups[inst.group as usize].scene;
-            group.occluded(&inst.ray_in_object_space(ray), t_max)
-        })
+        #[cfg(target_arch = "x86_64")]
+        if crate::integrator::has_x86_64_v3() {
+            // SAFETY: the CPU has the features, checked just above.
+            return unsafe { self.occluded_v3(ray, t_max) };
+        }
+        self.occluded_here(ray, t_max)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
+    unsafe fn occluded_v3(&self, ray: &Ray, t_max: f32) -> bool {
+        self.occluded_here(ray, t_max)
+    }
+
+    #[inline(always)]
+    fn occluded_here(&self, ray: &Ray, t_max: f32) -> bool {
+        self.tlas.occluded(
+            ray,
+            t_max,
+            #[inline(always)]
+            |k, t_max| {
+                let inst = &self.placed[k];
+                let group = &self.groups[inst.group as usize].scene;
+                group.occluded(&inst.ray_in_object_space(ray), t_max)
+            },
+        )
     }
 
     /// The lanes of `active` that an instance blocks, `lanes` rays at a time

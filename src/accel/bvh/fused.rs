@@ -27,7 +27,7 @@ use super::{
     bounds_weight_of, build_node, finish, inner, prims_of, slots_of, step, stub, BvhNode, Kind,
     Nodes, PrimRef, Split, Step, Sub, PARALLEL_MIN,
 };
-use crate::accel::wide::{rebased, ChildRef, Collapse, Node4, WideBvh, MERGE_MAX};
+use crate::accel::wide::{rebased, ChildRef, Collapse, Node, WideBvh, MERGE_MAX};
 use crate::accel::{huge_pages, BuildTimes};
 use crate::geometry::Aabb;
 use rayon::prelude::*;
@@ -43,7 +43,8 @@ pub(super) const FUSE_MAX: usize = 1 << 14;
 
 /// What the top's parent records of a stub. (Its leaves are not known until its subtree is
 /// built; the nodes of the top hold more than `FUSE_MAX` primitives, so the collapse, which
-/// reads the leaves and costly flag only of nodes over at most four, never reads theirs.)
+/// reads the leaves and costly flag only of nodes over at most `MERGE_MAX`, never reads
+/// theirs.)
 const STUB_SUB: Sub = Sub {
     leaves: 15,
     costly: false,
@@ -113,7 +114,7 @@ pub(super) fn build<K: Kind>(
     let stubs: Vec<usize> = tasks.keys().copied().collect();
     // A subtree's wide nodes are at most its binary inner nodes, half its slots.
     let most = wide_top.len() + tasks.values().map(|t| t.slots / 2).sum::<usize>();
-    let mut nodes: Vec<Node4> = huge_pages::with_capacity(most);
+    let mut nodes: Vec<Node> = huge_pages::with_capacity(most);
     let (roots, len) = subtrees(
         kind,
         tasks.into_values().collect(),
@@ -355,11 +356,11 @@ struct Placing {
     cursor: usize,
     /// Subtrees built and collapsed but not placed (one before them is not done): their
     /// number, wide nodes, numbered from 0, and root reference.
-    done: Vec<(usize, Vec<Node4>, ChildRef)>,
+    done: Vec<(usize, Vec<Node>, ChildRef)>,
     /// Each subtree's root reference, once placed.
     roots: Vec<ChildRef>,
     /// Emptied node vectors, for reuse.
-    spare: Vec<Vec<Node4>>,
+    spare: Vec<Vec<Node>>,
 }
 
 impl Placing {
@@ -389,10 +390,10 @@ impl Placing {
 }
 
 /// A subtree's place in the output array, and its wide nodes to copy there.
-type Placed = (usize, Vec<Node4>);
+type Placed = (usize, Vec<Node>);
 
 /// The output array of the second stage, written at disjoint places from several threads.
-struct Out(*mut MaybeUninit<Node4>);
+struct Out(*mut MaybeUninit<Node>);
 // SAFETY: each place is written once, by the thread that placed the subtree it belongs to
 // (see `Placing::ready`, which hands out each stretch once).
 unsafe impl Sync for Out {}
@@ -404,7 +405,7 @@ fn subtrees<K: Kind>(
     kind: &K,
     tasks: Vec<Task<'_>>,
     merge_weight: f32,
-    out: &mut [MaybeUninit<Node4>],
+    out: &mut [MaybeUninit<Node>],
     start: usize,
 ) -> (Vec<ChildRef>, usize) {
     let count = tasks.len();

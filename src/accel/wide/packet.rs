@@ -1,4 +1,4 @@
-//! Up to sixteen rays from one origin in one traversal of the 4-wide BVH: occlusion of a
+//! Up to sixteen rays from one origin in one traversal of the eight-wide BVH: occlusion of a
 //! vertex's shadow rays ([`WideBvh::occluded_packet`]) and the closest hits of a pinhole
 //! camera's rays ([`WideBvh::closest_packet`]); and occlusion of sixteen rays of their own
 //! origins, the shadow rays of a pixel's samples from their first vertices
@@ -12,7 +12,7 @@
 //! it (rays in lanes, in the manner of Wald, Slusallek, Benthin and Wagner, "Interactive
 //! Rendering with Coherent Ray Tracing", Eurographics 2001, with a mask of active rays). A
 //! ray found occluded leaves the mask; a subtree is entered only for the rays that enter its
-//! box. Before the exact tests a node's four children are culled against the packet's
+//! box. Before the exact tests a node's eight children are culled against the packet's
 //! interval of directions (interval arithmetic culling, as in Boulos et al., "Packet-based
 //! Whitted and Distribution Ray Tracing", Graphics Interface 2007), see `avx::Coherent`. The
 //! two traversals differ in what they seek ([`avx::Walk`]) and share the rest.
@@ -29,7 +29,7 @@
 //! (also checked at run time) the box tests take all sixteen lanes in one register, with the
 //! same operations lane by lane, so the answers do not depend on the CPU either.
 
-use super::{Node4, WideBvh, EMPTY, LEAF, STACK, WIDEN};
+use super::{Node, WideBvh, EMPTY, LEAF, STACK, WIDEN, WIDTH};
 use crate::geometry::Ray;
 use glam::Vec3A;
 
@@ -217,9 +217,9 @@ mod avx {
         /// 1/d as `Vec3A::recip` computes it (a division, not an approximation).
         inv: [[__m256; HALVES]; 3],
         t_max: [__m256; HALVES],
-        /// The origin, splatted for the four children of a node (zero where each lane has
+        /// The origin, splatted for the eight children of a node (zero where each lane has
         /// its own).
-        o: [__m128; 3],
+        o: [__m256; 3],
         /// Each lane's origin (packets of kind `ORIGINS` only).
         lane_o: [[__m256; HALVES]; 3],
     }
@@ -298,8 +298,8 @@ mod avx {
             t_max: load(&pk.t_max),
             // `slab − 0` is `slab`, bit for bit: the lanes subtract their own origins.
             o: match origins {
-                Some(_) => [_mm_setzero_ps(); 3],
-                None => [pk.o.x, pk.o.y, pk.o.z].map(|x| _mm_set1_ps(x)),
+                Some(_) => [_mm256_setzero_ps(); 3],
+                None => [pk.o.x, pk.o.y, pk.o.z].map(|x| _mm256_set1_ps(x)),
             },
             lane_o: origins.map_or(zero, |o| o.map(|a| load(&a))),
         };
@@ -499,7 +499,7 @@ mod avx {
                     let node = bvh.node(cur);
                     // (Every child is tested lane by lane: the entry distances order them.)
                     let (rel, mut cand, _) = relative::<KIND>(node, l, coh);
-                    let mut entered = [(0u32, 0u32, 0f32); 4];
+                    let mut entered = [(0u32, 0u32, 0f32); WIDTH];
                     let mut n = 0;
                     while cand != 0 {
                         let c = cand.trailing_zeros() as usize;
@@ -556,7 +556,7 @@ mod avx {
         }
     }
 
-    /// A node's slabs relative to the packet's origin, all four children at once: the
+    /// A node's slabs relative to the packet's origin, all eight children at once: the
     /// single-ray test's `slab − o`, which the origin shared by all lanes lets us share too;
     /// and the children that some lane may enter, and that every active lane enters. A
     /// coherent packet needs only each axis's near and far slab (the same for all its lanes)
@@ -565,34 +565,36 @@ mod avx {
     /// themselves, `l.o` being zero, and `enter` subtracts each lane's origin.)
     #[inline(always)]
     unsafe fn relative<const KIND: u8>(
-        node: &Node4,
+        node: &Node,
         l: &Lanes,
         coh: &Coherent,
-    ) -> ([[f32; 4]; 6], u32, u32) {
-        let slab = |s: usize| -> __m128 {
+    ) -> ([[f32; WIDTH]; 6], u32, u32) {
+        let slab = |s: usize| -> __m256 {
             debug_assert!(s < 6);
-            // SAFETY: slab indices are below 6 (`Coherent::new`, or 0..6 below).
-            (*node.bounds.get_unchecked(s)).into()
+            // SAFETY: slab indices are below 6 (`Coherent::new`, or 0..6 below); a node's
+            // bounds are 32-byte aligned.
+            _mm256_load_ps(node.bounds.get_unchecked(s).as_ptr())
         };
-        let mut rel = [[0f32; 4]; 6];
-        let mut cand = 0b1111;
+        let mut rel = [[0f32; WIDTH]; 6];
+        let mut cand = (1 << WIDTH) - 1;
         // Children every active lane surely enters (coherent packets only).
         let mut all = 0;
         if KIND == COHERENT {
-            let near: [__m128; 3] = std::array::from_fn(|a| _mm_sub_ps(slab(coh.near[a]), l.o[a]));
-            let far: [__m128; 3] = std::array::from_fn(|a| _mm_sub_ps(slab(coh.far[a]), l.o[a]));
+            let near: [__m256; 3] =
+                std::array::from_fn(|a| _mm256_sub_ps(slab(coh.near[a]), l.o[a]));
+            let far: [__m256; 3] = std::array::from_fn(|a| _mm256_sub_ps(slab(coh.far[a]), l.o[a]));
             (cand, all) = coh.children(&near, &far);
             for a in 0..3 {
-                _mm_storeu_ps(rel[2 * a].as_mut_ptr(), near[a]);
-                _mm_storeu_ps(rel[2 * a + 1].as_mut_ptr(), far[a]);
+                _mm256_storeu_ps(rel[2 * a].as_mut_ptr(), near[a]);
+                _mm256_storeu_ps(rel[2 * a + 1].as_mut_ptr(), far[a]);
             }
         } else {
-            let both: [__m128; 6] = std::array::from_fn(|s| _mm_sub_ps(slab(s), l.o[s / 2]));
+            let both: [__m256; 6] = std::array::from_fn(|s| _mm256_sub_ps(slab(s), l.o[s / 2]));
             if KIND == FINITE {
                 cand = coh.children_finite(&both);
             }
             for (r, v) in rel.iter_mut().zip(both) {
-                _mm_storeu_ps(r.as_mut_ptr(), v);
+                _mm256_storeu_ps(r.as_mut_ptr(), v);
             }
         }
         (rel, cand, all)
@@ -613,7 +615,7 @@ mod avx {
     unsafe fn enter<const KIND: u8, const WIDE: bool, const NEAR: bool>(
         l: &Lanes,
         l16: Option<&Lanes16>,
-        rel: &[[f32; 4]; 6],
+        rel: &[[f32; WIDTH]; 6],
         c: usize,
         mask: u32,
     ) -> (u32, f32) {
@@ -740,13 +742,14 @@ mod avx {
     }
 
     /// A packet whose active lanes have finite reciprocal directions, taken as one ray with
-    /// an interval of reciprocal directions per axis, for a test of a node's four children
+    /// an interval of reciprocal directions per axis, for a test of a node's eight children
     /// at once that rejects those no lane enters before the exact test of each lane against
     /// the others. Where on each axis the 1/d are of one sign too (most of next-event
     /// estimation's packets: rays from a point to a small light), all lanes use the same near
-    /// and far slab per axis, and the test needs only those (it rejects three children in
-    /// four in the TNCG15 room); otherwise it takes both slabs (`children_finite`: about a
-    /// quarter of the room's packets, from points within the light's extent along x or y).
+    /// and far slab per axis, and the test needs only those (it rejected three children in
+    /// four in the TNCG15 room, with four-wide nodes); otherwise it takes both slabs
+    /// (`children_finite`: about a quarter of the room's packets, from points within the
+    /// light's extent along x or y).
     ///
     /// That test never rejects a box a lane enters: a rounded product x·(1/d) is monotonic in
     /// 1/d, so its smallest and largest values over the lanes are those at the smallest and
@@ -759,17 +762,17 @@ mod avx {
         near: [usize; 3],
         far: [usize; 3],
         /// The smallest and largest 1/d of the active lanes, splatted.
-        lo: [__m128; 3],
-        hi: [__m128; 3],
+        lo: [__m256; 3],
+        hi: [__m256; 3],
         /// The largest and the smallest `t_max`.
-        t_max: __m128,
-        t_min: __m128,
+        t_max: __m256,
+        t_min: __m256,
     }
 
     impl Coherent {
         fn none() -> Coherent {
             // SAFETY: SSE is part of x86-64; never read (the general traversal ignores it).
-            let z = unsafe { _mm_setzero_ps() };
+            let z = unsafe { _mm256_setzero_ps() };
             Coherent {
                 one_sign: false,
                 near: [0, 2, 4],
@@ -834,14 +837,16 @@ mod avx {
                 return None;
             }
             let neg: [usize; 3] = std::array::from_fn(|a| (_mm_cvtss_f32(hi[a]) < 0.0) as usize);
+            // For the eight children of a node.
+            let eight = |v: __m128| _mm256_set_m128(v, v);
             Some(Coherent {
                 one_sign: one_sign == 0b1111,
                 near: std::array::from_fn(|a| 2 * a + neg[a]),
                 far: std::array::from_fn(|a| 2 * a + 1 - neg[a]),
-                lo,
-                hi,
-                t_max: reduce(&l.t_max, true),
-                t_min: reduce(&l.t_max, false),
+                lo: lo.map(eight),
+                hi: hi.map(eight),
+                t_max: eight(reduce(&l.t_max, true)),
+                t_min: eight(reduce(&l.t_max, false)),
             })
         }
 
@@ -855,29 +860,32 @@ mod avx {
         /// largest every lane's exit from above, with the same max/min/widening after.
         #[inline]
         #[target_feature(enable = "avx")]
-        fn children_finite(&self, both: &[__m128; 6]) -> u32 {
-            let mut tn = [_mm_setzero_ps(); 3];
-            let mut tf = [_mm_setzero_ps(); 3];
+        fn children_finite(&self, both: &[__m256; 6]) -> u32 {
+            let mut tn = [_mm256_setzero_ps(); 3];
+            let mut tf = [_mm256_setzero_ps(); 3];
             for a in 0..3 {
                 let (s0, s1) = (both[2 * a], both[2 * a + 1]);
                 let p = [
-                    _mm_mul_ps(s0, self.lo[a]),
-                    _mm_mul_ps(s0, self.hi[a]),
-                    _mm_mul_ps(s1, self.lo[a]),
-                    _mm_mul_ps(s1, self.hi[a]),
+                    _mm256_mul_ps(s0, self.lo[a]),
+                    _mm256_mul_ps(s0, self.hi[a]),
+                    _mm256_mul_ps(s1, self.lo[a]),
+                    _mm256_mul_ps(s1, self.hi[a]),
                 ];
-                tn[a] = _mm_min_ps(_mm_min_ps(p[0], p[1]), _mm_min_ps(p[2], p[3]));
-                tf[a] = _mm_max_ps(_mm_max_ps(p[0], p[1]), _mm_max_ps(p[2], p[3]));
+                tn[a] = _mm256_min_ps(_mm256_min_ps(p[0], p[1]), _mm256_min_ps(p[2], p[3]));
+                tf[a] = _mm256_max_ps(_mm256_max_ps(p[0], p[1]), _mm256_max_ps(p[2], p[3]));
             }
-            let tnear = _mm_max_ps(
-                _mm_max_ps(_mm_max_ps(tn[0], tn[1]), tn[2]),
-                _mm_setzero_ps(),
+            let tnear = _mm256_max_ps(
+                _mm256_max_ps(_mm256_max_ps(tn[0], tn[1]), tn[2]),
+                _mm256_setzero_ps(),
             );
-            let tfar = _mm_mul_ps(
-                _mm_min_ps(_mm_min_ps(_mm_min_ps(tf[0], tf[1]), tf[2]), self.t_max),
-                _mm_set1_ps(WIDEN),
+            let tfar = _mm256_mul_ps(
+                _mm256_min_ps(
+                    _mm256_min_ps(_mm256_min_ps(tf[0], tf[1]), tf[2]),
+                    self.t_max,
+                ),
+                _mm256_set1_ps(WIDEN),
             );
-            _mm_movemask_ps(_mm_cmple_ps(tnear, tfar)) as u32
+            _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tnear, tfar)) as u32
         }
 
         /// Bits c: child c may be entered by some lane, and child c is entered by every
@@ -888,32 +896,37 @@ mod avx {
         /// entry and exit distances, which lie between the bounds, meet too.
         #[inline]
         #[target_feature(enable = "avx")]
-        fn children(&self, near: &[__m128; 3], far: &[__m128; 3]) -> (u32, u32) {
-            let mut tn = [_mm_setzero_ps(); 3];
-            let mut tf = [_mm_setzero_ps(); 3];
-            let mut tn_hi = [_mm_setzero_ps(); 3];
-            let mut tf_lo = [_mm_setzero_ps(); 3];
+        fn children(&self, near: &[__m256; 3], far: &[__m256; 3]) -> (u32, u32) {
+            let mut tn = [_mm256_setzero_ps(); 3];
+            let mut tf = [_mm256_setzero_ps(); 3];
+            let mut tn_hi = [_mm256_setzero_ps(); 3];
+            let mut tf_lo = [_mm256_setzero_ps(); 3];
             for a in 0..3 {
                 let (n, f) = (near[a], far[a]);
-                let (n_lo, n_hi) = (_mm_mul_ps(n, self.lo[a]), _mm_mul_ps(n, self.hi[a]));
-                let (f_lo, f_hi) = (_mm_mul_ps(f, self.lo[a]), _mm_mul_ps(f, self.hi[a]));
-                tn[a] = _mm_min_ps(n_lo, n_hi);
-                tn_hi[a] = _mm_max_ps(n_lo, n_hi);
-                tf[a] = _mm_max_ps(f_lo, f_hi);
-                tf_lo[a] = _mm_min_ps(f_lo, f_hi);
+                let (n_lo, n_hi) = (_mm256_mul_ps(n, self.lo[a]), _mm256_mul_ps(n, self.hi[a]));
+                let (f_lo, f_hi) = (_mm256_mul_ps(f, self.lo[a]), _mm256_mul_ps(f, self.hi[a]));
+                tn[a] = _mm256_min_ps(n_lo, n_hi);
+                tn_hi[a] = _mm256_max_ps(n_lo, n_hi);
+                tf[a] = _mm256_max_ps(f_lo, f_hi);
+                tf_lo[a] = _mm256_min_ps(f_lo, f_hi);
             }
-            let widen = _mm_set1_ps(WIDEN);
-            let zero = _mm_setzero_ps();
-            let max3 = |t: [__m128; 3]| _mm_max_ps(_mm_max_ps(_mm_max_ps(t[0], t[1]), t[2]), zero);
-            let min3 = |t: [__m128; 3], t_max| {
-                _mm_mul_ps(
-                    _mm_min_ps(_mm_min_ps(_mm_min_ps(t[0], t[1]), t[2]), t_max),
+            let widen = _mm256_set1_ps(WIDEN);
+            let zero = _mm256_setzero_ps();
+            let max3 = |t: [__m256; 3]| {
+                _mm256_max_ps(_mm256_max_ps(_mm256_max_ps(t[0], t[1]), t[2]), zero)
+            };
+            let min3 = |t: [__m256; 3], t_max| {
+                _mm256_mul_ps(
+                    _mm256_min_ps(_mm256_min_ps(_mm256_min_ps(t[0], t[1]), t[2]), t_max),
                     widen,
                 )
             };
-            let some = _mm_cmple_ps(max3(tn), min3(tf, self.t_max));
-            let every = _mm_cmple_ps(max3(tn_hi), min3(tf_lo, self.t_min));
-            (_mm_movemask_ps(some) as u32, _mm_movemask_ps(every) as u32)
+            let some = _mm256_cmp_ps::<_CMP_LE_OQ>(max3(tn), min3(tf, self.t_max));
+            let every = _mm256_cmp_ps::<_CMP_LE_OQ>(max3(tn_hi), min3(tf_lo, self.t_min));
+            (
+                _mm256_movemask_ps(some) as u32,
+                _mm256_movemask_ps(every) as u32,
+            )
         }
     }
 }

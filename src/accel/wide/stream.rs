@@ -19,8 +19,8 @@
 //! compute.
 
 use super::{
-    child_key, child_of_key, lowest, sort4, ChildRef, Node4, RayBoxes, Stack, WideBvh, EMPTY, LEAF,
-    WIDEN,
+    child_key, child_of_key, lowest, sort_keys, ChildRef, Node, RayBoxes, Stack, WideBvh, EMPTY,
+    LEAF, WIDEN, WIDTH,
 };
 use crate::accel::prefetch;
 use crate::geometry::Ray;
@@ -291,16 +291,16 @@ impl WideBvh {
         }
     }
 
-    /// Prefetches what a step at `c` reads: a node's bounds and children (112 bytes on 16,
-    /// so two or three cache lines), or by `leaf` a leaf's primitives.
+    /// Prefetches what a step at `c` reads: a node's bounds and children (224 bytes on 32,
+    /// so four cache lines), or by `leaf` a leaf's primitives.
     #[inline(always)]
     fn prefetch_step(&self, c: ChildRef, leaf: &impl Fn(usize, usize)) {
         if c & LEAF != 0 {
             leaf(((c & !LEAF) >> 4) as usize, (c & 15) as usize);
         } else {
-            let p = self.node(c) as *const Node4 as *const u8;
-            const LAST: usize = std::mem::size_of::<Node4>() - 1;
-            for off in [0, 64, LAST] {
+            let p = self.node(c) as *const Node as *const u8;
+            const LAST: usize = std::mem::size_of::<Node>() - 1;
+            for off in [0, 64, 128, LAST] {
                 // SAFETY: each offset lies inside the node.
                 prefetch(unsafe { &*p.add(off) });
             }
