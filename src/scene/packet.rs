@@ -61,7 +61,7 @@ impl Scene {
         };
         for l in lanes_of(active) {
             let hit = (found >> l & 1 != 0).then_some(best[l]);
-            out[l] = self.interaction_of(&pk.ray(l), hit);
+            self.interaction_into(&pk.ray(l), hit, &mut out[l]);
         }
     }
 

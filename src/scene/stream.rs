@@ -58,17 +58,14 @@ impl Scene {
         assert_eq!(rays.len(), out.len(), "one output per ray");
         if K <= 1 || self.is_flat() {
             for (ray, o) in rays.iter().zip(out.iter_mut()) {
-                *o = self.intersect(ray);
+                self.interaction_into(ray, self.closest(ray, f32::INFINITY), o);
             }
             return;
         }
         let done = |k: usize, found: bool, best: &(usize, f32, f32, f32)| {
             let ray = &rays[k];
             let hit = found.then_some(*best);
-            out[k] = match &self.instances {
-                Some(inst) => inst.intersect(self, ray, hit),
-                None => hit.map(|(i, u, v, t)| self.interaction(ray, i, u, v, t)),
-            };
+            self.interaction_into(ray, hit, &mut out[k]);
         };
         if self.masked {
             self.closest_stream::<K>(rays, |ray, i, u, v, t| self.seen(ray, i, u, v, t), done);
