@@ -90,7 +90,7 @@ fn scene() -> (Vec<Material>, Vec<u32>) {
 }
 
 fn at(materials: &[Material], i: u32) -> Material {
-    materials[i as usize].at(materials, &[], Vec2::ZERO)
+    materials[i as usize].at(materials, &[], Vec2::ZERO, None)
 }
 
 /// The mixture of a resolved blend is the weighted sum of its parts, recursively: f and
@@ -190,7 +190,7 @@ fn textured_weight() {
     let (f0, f1) = (ms[0].eval(wo, wi), ms[1].eval(wo, wi));
     // eval_1 of the checkerboard: color1 in the cell (¼, ¼), color0 in (¾, ¼).
     for (uv, w) in [(Vec2::splat(0.25), 0.9), (Vec2::new(0.75, 0.25), 0.2)] {
-        let m = ms[n as usize].at(&ms, &textures, uv);
+        let m = ms[n as usize].at(&ms, &textures, uv, None);
         let f = f0 * (1.0 - w) + f1 * w;
         assert!((m.eval(wo, wi) - f).abs().max_element() < 1e-6, "{uv}");
     }

@@ -306,7 +306,7 @@ fn metallic_roughness_and_transmission_textures_are_exact() {
         glam::Vec3::new(0.0, 25.0 / 255.0, 1.0),
     ];
     for (uv, w) in TEXELS.iter().zip(want) {
-        let got = principled(&m.at(&desc.materials, &desc.textures, *uv));
+        let got = principled(&m.at(&desc.materials, &desc.textures, *uv, None));
         assert!(got.abs_diff_eq(w, 1e-5), "at {uv}: {got}, want {w}");
     }
     let c = principled(m);

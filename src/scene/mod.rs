@@ -737,13 +737,10 @@ impl Scene {
     #[inline]
     pub fn material_at(&self, si: &Interaction) -> Material {
         let m = &self.materials[si.material as usize];
-        let mut hit = m.at(&self.materials, &self.textures, si.uv);
-        if m.perturbs() {
-            hit.perturbed = Some(crate::material::normal_map::Perturbed::new(
-                si.ns, si.ns_base,
-            ));
-        }
-        hit
+        let perturbed = m
+            .perturbs()
+            .then(|| crate::material::normal_map::Perturbed::new(si.ns, si.ns_base));
+        m.at(&self.materials, &self.textures, si.uv, perturbed)
     }
 
     /// The mesh texture coordinates of triangle `idx`'s vertices, if its mesh has them
