@@ -769,31 +769,26 @@ impl RayBoxes {
             _mm256_broadcast_ss(&self.inv[1].x),
             _mm256_broadcast_ss(&self.inv[2].x),
         ];
-        // SAFETY (every load): `near` and `far` hold the offsets of slabs 0 to 5, set in
-        // `new`; a `Node` and its `bounds` are 32-byte aligned.
-        let tn_x = _mm256_mul_ps(
-            _mm256_sub_ps(_mm256_load_ps(base.add(self.near[0]) as *const f32), o[0]),
-            inv[0],
+        // The distances to slab `$off` (a byte offset) along axis `$a`.
+        macro_rules! slab {
+            ($off:expr, $a:expr) => {
+                // SAFETY: `near` and `far` hold the offsets of slabs 0 to 5, set in `new`; a
+                // `Node` and its `bounds` are 32-byte aligned.
+                _mm256_mul_ps(
+                    _mm256_sub_ps(_mm256_load_ps(base.add($off) as *const f32), o[$a]),
+                    inv[$a],
+                )
+            };
+        }
+        let (tn_x, tn_y, tn_z) = (
+            slab!(self.near[0], 0),
+            slab!(self.near[1], 1),
+            slab!(self.near[2], 2),
         );
-        let tn_y = _mm256_mul_ps(
-            _mm256_sub_ps(_mm256_load_ps(base.add(self.near[1]) as *const f32), o[1]),
-            inv[1],
-        );
-        let tn_z = _mm256_mul_ps(
-            _mm256_sub_ps(_mm256_load_ps(base.add(self.near[2]) as *const f32), o[2]),
-            inv[2],
-        );
-        let tf_x = _mm256_mul_ps(
-            _mm256_sub_ps(_mm256_load_ps(base.add(self.far[0]) as *const f32), o[0]),
-            inv[0],
-        );
-        let tf_y = _mm256_mul_ps(
-            _mm256_sub_ps(_mm256_load_ps(base.add(self.far[1]) as *const f32), o[1]),
-            inv[1],
-        );
-        let tf_z = _mm256_mul_ps(
-            _mm256_sub_ps(_mm256_load_ps(base.add(self.far[2]) as *const f32), o[2]),
-            inv[2],
+        let (tf_x, tf_y, tf_z) = (
+            slab!(self.far[0], 0),
+            slab!(self.far[1], 1),
+            slab!(self.far[2], 2),
         );
         // The operand order of the four-lane passes (max and min return the second operand
         // where either is NaN, in SSE and AVX alike).

@@ -192,7 +192,7 @@ impl Material {
     /// bump-mapped material). A material that does not vary is copied, built in one
     /// expression with `perturbed`: copied first and then given `perturbed`, it was stored
     /// in pieces and loaded back whole on its way to the caller, which the CPU's store
-    /// forwarding cannot serve (5 % of the gallery's render, `perf annotate`).
+    /// forwarding cannot serve (about 1 % of the gallery's samples, `perf annotate`).
     #[inline]
     pub fn at(
         &self,

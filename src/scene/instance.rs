@@ -292,8 +292,7 @@ impl Instances {
             t_max,
             #[inline(always)]
             |k, t_max| {
-                let inst = &self.placed[k];
-                let group = &self.groups[inst.group as usize].scene;
+                let (inst, group) = self.instance(k);
                 let (i, u, v, t) = group.closest(&inst.ray_in_object_space(ray), t_max)?;
                 (t < t_max).then(|| {
                     best = Some((k, i, u, v, t));
@@ -302,12 +301,16 @@ impl Instances {
             },
         );
         let (k, i, u, v, t) = best?;
-        let inst = &self.placed[k];
-        let group = &self.groups[inst.group as usize];
-        let si = group
-            .scene
-            .interaction(&inst.ray_in_object_space(ray), i, u, v, t);
+        let (inst, group) = self.instance(k);
+        let si = group.interaction(&inst.ray_in_object_space(ray), i, u, v, t);
         Some(inst.hit_in_world(si))
+    }
+
+    /// Instance `k` and its group's scene.
+    #[inline(always)]
+    fn instance(&self, k: usize) -> (&Placed, &Scene) {
+        let inst = &self.placed[k];
+        (inst, &self.groups[inst.group as usize].scene)
     }
 
     /// Whether an instance blocks `ray` before `t_max` (for x86-64-v3 where the CPU has it,
@@ -335,8 +338,7 @@ impl Instances {
             t_max,
             #[inline(always)]
             |k, t_max| {
-                let inst = &self.placed[k];
-                let group = &self.groups[inst.group as usize].scene;
+                let (inst, group) = self.instance(k);
                 group.occluded(&inst.ray_in_object_space(ray), t_max)
             },
         )
@@ -347,8 +349,7 @@ impl Instances {
     #[inline(never)]
     pub(super) fn occluded_packet_with(&self, pk: &RayPacket, active: u32, lanes: usize) -> u32 {
         self.tlas.occluded_packet_with(pk, active, lanes, |k, m| {
-            let inst = &self.placed[k];
-            let group = &self.groups[inst.group as usize].scene;
+            let (inst, group) = self.instance(k);
             group.occluded_packet_with(&inst.packet_in_object_space(pk), m, lanes)
         })
     }

@@ -257,7 +257,7 @@ impl Scene {
     /// [`Scene::interaction_of`] written into `out`. The batches' queries write each answer
     /// in place: built on the stack and copied out, an interaction was stored in 16-byte
     /// pieces and loaded back in 32-byte ones, which the CPU cannot forward from the stores
-    /// (on the bunny box, half of `intersect_many`'s own time waited on those copies).
+    /// (on the bunny box, two fifths of `intersect_many`'s own time waited on those copies).
     #[inline(always)]
     fn interaction_into(
         &self,

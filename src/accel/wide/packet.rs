@@ -771,8 +771,9 @@ mod avx {
 
     impl Coherent {
         fn none() -> Coherent {
-            // SAFETY: SSE is part of x86-64; never read (the general traversal ignores it).
-            let z = unsafe { _mm256_setzero_ps() };
+            // SAFETY: zero bits are a valid `__m256` (no AVX instruction is needed to make
+            // one); never read (the general traversal ignores it).
+            let z: __m256 = unsafe { std::mem::zeroed() };
             Coherent {
                 one_sign: false,
                 near: [0, 2, 4],
