@@ -76,6 +76,8 @@ macro_rules! closest_step {
                 while mask != 0 {
                     let c = lowest(mask);
                     mask &= mask - 1;
+                    // (n < WIDTH here: the mask has at most WIDTH bits. The `&` tells the
+                    // compiler so, and saves the bounds check.)
                     k[n & (WIDTH - 1)] = child_key(t[c], node.child[c]);
                     n += 1;
                 }
@@ -257,6 +259,15 @@ impl Node {
             child: [EMPTY; WIDTH],
         }
     }
+    /// The box of child `slot` (empty for an empty slot).
+    fn child_box(&self, slot: usize) -> Aabb {
+        let b = &self.bounds;
+        Aabb {
+            min: glam::Vec3A::new(b[0][slot], b[2][slot], b[4][slot]),
+            max: glam::Vec3A::new(b[1][slot], b[3][slot], b[5][slot]),
+        }
+    }
+
     /// This node as it lies in a tree whose nodes were collapsed on their own, counted from
     /// 0, and then placed from index `base` on: its inner children's references moved by
     /// `base`.
@@ -416,11 +427,7 @@ impl WideBvh {
             cost += a;
             let n = self.node(c);
             for slot in 0..WIDTH {
-                let b = Aabb {
-                    min: glam::Vec3A::new(n.bounds[0][slot], n.bounds[2][slot], n.bounds[4][slot]),
-                    max: glam::Vec3A::new(n.bounds[1][slot], n.bounds[3][slot], n.bounds[5][slot]),
-                };
-                stack.push((n.child[slot], area(&b)));
+                stack.push((n.child[slot], area(&n.child_box(slot))));
             }
         }
         cost / area(&root)
@@ -949,10 +956,7 @@ impl WideBvh {
                     continue;
                 }
                 kids += 1;
-                let kb = Aabb {
-                    min: glam::Vec3A::new(n.bounds[0][slot], n.bounds[2][slot], n.bounds[4][slot]),
-                    max: glam::Vec3A::new(n.bounds[1][slot], n.bounds[3][slot], n.bounds[5][slot]),
-                };
+                let kb = n.child_box(slot);
                 assert!(inside(&kb, &b), "a child's box outside its parent's");
                 stack.push((n.child[slot], kb, depth + 1));
             }
