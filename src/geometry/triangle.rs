@@ -1,7 +1,7 @@
 //! Triangles and the Möller–Trumbore ray–triangle test.
 
 use super::ray::{gamma, Ray};
-use crate::simd::{Float, Vector3};
+use crate::simd::{Float, Vector3, V3};
 use glam::{DVec3, Vec3A, Vec4};
 
 /// A triangle stored by its vertices (Möller and Trumbore, "Fast, Minimum Storage
@@ -116,41 +116,6 @@ impl Triangle {
         self.intersect_f64(ray, t_max)
     }
 
-    /// [`Triangle::intersect`]'s fast path for four rays from one origin `o` (directions
-    /// `d` by axis, a lane per ray): the lanes it finds hit before their `t_max`, and the
-    /// lanes near an edge that it leaves to `intersect` (whose f64 test decides them). The
-    /// same IEEE operations in the same order as `intersect` (glam's cross product, dot
-    /// products summed as (x + y) + z), so every other lane gets `intersect`'s answer;
-    /// what the rays share (s = o − p0, q = s × e1, e2 · q) is computed once.
-    #[inline(always)]
-    pub fn occludes4(&self, o: Vec3A, d: [Vec4; 3], t_max: Vec4) -> (u32, u32) {
-        let e1 = self.p1 - self.p0;
-        let e2 = self.p2 - self.p0;
-        let s = o - self.p0;
-        let q = s.cross(e1);
-        let t_num = Vec4::splat(e2.dot(q));
-        let sp = |v: Vec3A| [Vec4::splat(v.x), Vec4::splat(v.y), Vec4::splat(v.z)];
-        let (e1, e2, s, q) = (sp(e1), sp(e2), sp(s), sp(q));
-        let dot = |a: &[Vec4; 3], b: &[Vec4; 3]| (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2];
-        // p = d × e2, component by component as glam computes it.
-        let p = [
-            d[1] * e2[2] - e2[1] * d[2],
-            d[2] * e2[0] - e2[2] * d[0],
-            d[0] * e2[1] - e2[0] * d[1],
-        ];
-        let inv_det = Vec4::ONE / dot(&e1, &p);
-        let u = dot(&s, &p) * inv_det;
-        let v = dot(&d, &q) * inv_det;
-        let w = Vec4::ONE - u - v;
-        // u, v and w > ε (false for NaN, as in `intersect`).
-        let eps = Vec4::splat(EDGE_EPS);
-        let clear = u.cmpgt(eps) & v.cmpgt(eps) & w.cmpgt(eps);
-        let t = t_num * inv_det;
-        let hit = clear & t.cmpgt(Vec4::ZERO) & t.cmplt(t_max);
-        let out = u.cmplt(-eps) | v.cmplt(-eps) | (u + v).cmpgt(Vec4::splat(1.0 + EDGE_EPS));
-        (hit.bitmask(), !(clear | out).bitmask() & 15)
-    }
-
     #[cold]
     fn intersect_f64(&self, ray: &Ray, t_max: f32) -> Option<(f32, f32, f32)> {
         let d = |v: Vec3A| DVec3::new(v.x as f64, v.y as f64, v.z as f64);
@@ -206,6 +171,50 @@ impl Triangle {
     }
 }
 
+/// What [`intersect_lanes`] decides in each lane.
+pub struct LaneHits<T: Float> {
+    /// The distance and the barycentric weights u and v, meaningful in the `clear` lanes.
+    pub t: T,
+    pub u: T,
+    pub v: T,
+    /// Lanes whose point lies clearly inside the triangle: there [`Triangle::intersect`]
+    /// answers (t, u, v) where 0 < t < t_max, else None.
+    pub clear: T::Mask,
+    /// Lanes near an edge (or NaN), which `intersect` decides in f64: the caller asks it.
+    /// The lanes neither clear nor unsure miss.
+    pub unsure: T::Mask,
+}
+
+/// [`Triangle::intersect`]'s fast path in lanes: rays (`o`, `d`) against a triangle
+/// (`p`: its vertices), each lane its own ray, or its own triangle, or both. The same IEEE
+/// operations in the same order as `intersect` (glam's cross product, dot products summed as
+/// (x + y) + z), so each lane gets `intersect`'s answer wherever it is not unsure. Without
+/// `intersect`'s early misses (in lanes both sides of a branch are paid): the lanes they
+/// end (u or v below about −ε, or t ≤ 0) are not clear here, and any that rounding leaves
+/// unsure `intersect` ends.
+#[inline(always)]
+pub fn intersect_lanes<T: Float>(p: [V3<T>; 3], o: V3<T>, d: V3<T>) -> LaneHits<T> {
+    let e1 = p[1] - p[0];
+    let e2 = p[2] - p[0];
+    let s = o - p[0];
+    let pv = d.cross(e2);
+    let q = s.cross(e1);
+    let inv_det = T::splat(1.0) / e1.dot(pv);
+    let u = s.dot(pv) * inv_det;
+    let v = d.dot(q) * inv_det;
+    let w = T::splat(1.0) - u - v;
+    let eps = T::splat(EDGE_EPS);
+    let clear = u.gt(eps) & v.gt(eps) & w.gt(eps);
+    let out = u.lt(-eps) | v.lt(-eps) | (u + v).gt(T::splat(1.0 + EDGE_EPS));
+    LaneHits {
+        t: e2.dot(q) * inv_det,
+        u,
+        v,
+        clear,
+        unsure: !(clear | out),
+    }
+}
+
 /// [`Triangle::point`] over any lanes, for the vertices `p0`, `p1`, `p2`.
 #[inline(always)]
 pub fn barycentric_point<V: Vector3>(p0: V, p1: V, p2: V, u: V::F, v: V::F) -> (V, V) {
@@ -218,6 +227,99 @@ pub fn barycentric_point<V: Vector3>(p0: V, p1: V, p2: V, u: V::F, v: V::F) -> (
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every lane of `intersect_lanes` that is not unsure gets `intersect`'s answer, bit for
+    /// bit, with its lanes of rays against one triangle or of triangles against one ray:
+    /// random triangles (some degenerate or tiny), rays aimed inside, outside and within
+    /// rounding of edges and vertices, and some from the triangle's plane.
+    #[test]
+    fn intersect_lanes_agrees_with_intersect() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rnd = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mut point = |s: f32| Vec3A::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5) * s;
+        let mut cases = Vec::new();
+        for n in 0..40_000 {
+            let p0 = point(2.0);
+            let (mut p1, mut p2) = (p0 + point(2.0), p0 + point(2.0));
+            match n % 10 {
+                0 => p2 = p0 + (p1 - p0) * 0.37, // collinear
+                1 => (p1, p2) = (p0 + point(1e-6), p0 + point(1e-6)),
+                _ => {}
+            }
+            let tri = Triangle::new(p0, p1, p2);
+            // Barycentrics: anywhere near the triangle, or on an edge or vertex give or take
+            // a few ulps.
+            let (mut u, mut v) = (point(1.2).x + 0.4, point(1.2).y + 0.4);
+            match n % 6 {
+                0 => u = 0.0,
+                1 => (u, v) = (1.0 - v, v),
+                2 => (u, v) = (1.0, 0.0),
+                _ => {}
+            }
+            let nudge = point(4e-6);
+            let target = tri.point(u + nudge.x, v + nudge.y).0;
+            let o = if n % 7 == 0 {
+                p0 + (p1 - p0) * 0.5 + point(4.0) * 1e-3 // near the plane
+            } else {
+                point(8.0)
+            };
+            let t_max = if n % 3 == 0 {
+                1e3
+            } else {
+                point(4.0).x.abs() + 0.5
+            };
+            cases.push((tri, Ray::new(o, target - o), t_max));
+        }
+        let (mut hits, mut unsure, mut misses) = (0, 0, 0);
+        let mut check = |tri: &Triangle, ray: &Ray, t_max: f32, r: &LaneHits<Vec4>, k: usize| {
+            let want = tri.intersect(ray, t_max);
+            if r.unsure.test(k) {
+                unsure += 1;
+                return;
+            }
+            let (t, u, v) = (r.t[k], r.u[k], r.v[k]);
+            let got = (r.clear.test(k) && t > 0.0 && t < t_max).then_some((t, u, v));
+            let bits = |h: Option<(f32, f32, f32)>| h.map(|(t, u, v)| [t, u, v].map(f32::to_bits));
+            assert_eq!(bits(got), bits(want), "{tri:?} {ray:?} {t_max}");
+            if got.is_some() {
+                hits += 1;
+            } else {
+                misses += 1;
+            }
+        };
+        let lanes = |f: &dyn Fn(usize) -> Vec3A| {
+            V3::new(
+                Vec4::from_array(std::array::from_fn(|k| f(k).x)),
+                Vec4::from_array(std::array::from_fn(|k| f(k).y)),
+                Vec4::from_array(std::array::from_fn(|k| f(k).z)),
+            )
+        };
+        for c in cases.chunks_exact(4) {
+            // Four rays against the first triangle...
+            let tri = &c[0].0;
+            let p = tri.vertices().map(V3::broadcast);
+            let r = intersect_lanes(p, lanes(&|k| c[k].1.o), lanes(&|k| c[k].1.d));
+            for (k, (_, ray, t_max)) in c.iter().enumerate() {
+                check(tri, ray, *t_max, &r, k);
+            }
+            // ...and the first ray against four triangles.
+            let (ray, t_max) = (&c[0].1, c[0].2);
+            let p = [0, 1, 2].map(|j| lanes(&|k| c[k].0.vertices()[j]));
+            let r = intersect_lanes(p, V3::broadcast(ray.o), V3::broadcast(ray.d));
+            for (k, (tri, _, _)) in c.iter().enumerate() {
+                check(tri, ray, t_max, &r, k);
+            }
+        }
+        assert!(
+            hits > 2_000 && misses > 20_000 && unsure > 4_000,
+            "{hits} hits, {misses} misses, {unsure} unsure"
+        );
+    }
 
     /// `has_area` says what `area() > 0` says, for ordinary, tiny, degenerate and non-finite
     /// triangles.

@@ -380,11 +380,7 @@ impl Scene {
         t_max: f32,
         keep: &impl Fn(usize, f32, f32, f32) -> bool,
     ) -> Option<f32> {
-        let (t, u, v) = self.hit(ray, i, f32::INFINITY)?;
-        ((t < t_max || (t == t_max && i < best.0)) && keep(i, u, v, t)).then(|| {
-            *best = (i, u, v, t);
-            t
-        })
+        take_nearer(best, i, self.hit(ray, i, f32::INFINITY)?, t_max, keep)
     }
 
     #[inline(always)]
@@ -554,7 +550,7 @@ impl Scene {
     pub fn occluded_packet_with(&self, pk: &RayPacket, active: u32, lanes: usize) -> u32 {
         let hits = self
             .bvh
-            .occluded_packet_with(pk, active, lanes, |i, m| self.packet_hits(pk, i, m));
+            .occluded_packet_with(pk, active, lanes, |i, m| self.packet_hits(pk, None, i, m));
         match &self.instances {
             Some(inst) if hits != active => {
                 hits | inst.occluded_packet_with(pk, active & !hits, lanes)
@@ -613,15 +609,7 @@ impl Scene {
                 pk.t_max[k] = t_max[k];
             }
             self.bvh.occluded_origins(&o, &pk, all, lanes, |i, m| {
-                crate::simd::lanes_of(m).fold(0, |hits, k| {
-                    let (ray, t) = (&rays[k], t_max[k]);
-                    let blocks = if self.masked {
-                        self.blocks_seen(ray, i, t)
-                    } else {
-                        self.hit(ray, i, t).is_some()
-                    };
-                    hits | (blocks as u32) << k
-                })
+                self.packet_hits(&pk, Some(&o), i, m)
             })
         };
         match &self.instances {
@@ -630,64 +618,6 @@ impl Scene {
             }),
             _ => hits,
         }
-    }
-
-    /// The lanes of `lanes` whose rays primitive `i` blocks.
-    #[inline(always)]
-    fn packet_hits(&self, pk: &RayPacket, i: usize, lanes: u32) -> u32 {
-        let each = |mut m: u32, hit: &dyn Fn(usize) -> bool| {
-            let mut hits = 0;
-            while m != 0 {
-                let lane = m.trailing_zeros() as usize;
-                m &= m - 1;
-                hits |= (hit(lane) as u32) << lane;
-            }
-            hits
-        };
-        // SAFETY: the BVH's leaves name primitives below tris.len() (Scene::build).
-        let [a, b, c] = unsafe { *self.tris.get_unchecked(i) };
-        if self.masked && self.has_opacity(i) {
-            return each(lanes, &|l| self.blocks_seen(&pk.ray(l), i, pk.t_max[l]));
-        }
-        if lanes & (lanes - 1) == 0 {
-            return each(lanes, &|l| self.hit(&pk.ray(l), i, pk.t_max[l]).is_some());
-        }
-        // Several rays: four at a time (for a triangle, those near an edge one by one).
-        let four = |h: usize| {
-            // (Loaded in place: `pk.d.map` would copy the whole arrays first.)
-            let d = std::array::from_fn(|k| Vec4::from_slice(&pk.d[k][h..h + 4]));
-            (d, Vec4::from_slice(&pk.t_max[h..h + 4]))
-        };
-        let mut hits = 0;
-        if a == SPHERE {
-            let sphere = &self.spheres[b as usize];
-            for h in (0..PACKET).step_by(4) {
-                let m = (lanes >> h) & 15;
-                if m != 0 {
-                    let (d, t_max) = four(h);
-                    hits |= (sphere.occludes4(pk.o, d, t_max) & m) << h;
-                }
-            }
-            return hits;
-        }
-        let tri = Triangle::new(
-            self.vertex_fast(a),
-            self.vertex_fast(b),
-            self.vertex_fast(c),
-        );
-        for h in (0..PACKET).step_by(4) {
-            let m = (lanes >> h) & 15;
-            if m == 0 {
-                continue;
-            }
-            let (d, t_max) = four(h);
-            let (hit, unsure) = tri.occludes4(pk.o, d, t_max);
-            hits |= (hit & m) << h;
-            hits |= each((unsure & m) << h, &|l| {
-                tri.intersect(&pk.ray(l), pk.t_max[l]).is_some()
-            });
-        }
-        hits
     }
 
     /// Bytes held by the geometry the integrators trace: per-primitive indices and
@@ -789,4 +719,21 @@ impl Scene {
 }
 
 /// Texture coordinates on a sphere at unit normal `n` (Mitsuba's): (φ/2π, θ/π).
+/// [`Scene::keep_nearer`]'s rule for primitive `i`'s hit (t, u, v), found without a bound:
+/// it becomes `best` (primitive, u, v, t), and its distance is returned, if `keep` keeps it
+/// and it is nearer than `t_max`, or as near and of a lower primitive than `best`'s.
+#[inline(always)]
+fn take_nearer(
+    best: &mut (usize, f32, f32, f32),
+    i: usize,
+    (t, u, v): (f32, f32, f32),
+    t_max: f32,
+    keep: &impl Fn(usize, f32, f32, f32) -> bool,
+) -> Option<f32> {
+    ((t < t_max || (t == t_max && i < best.0)) && keep(i, u, v, t)).then(|| {
+        *best = (i, u, v, t);
+        t
+    })
+}
+
 pub(crate) use crate::geometry::sphere::uv_of_normal as sphere_uv;

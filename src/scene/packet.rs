@@ -9,11 +9,15 @@
 //! Every answer is the same bits as [`Scene::intersect`]'s: each lane tests the boxes and the
 //! primitives it reaches by the single ray's operations (`Scene::keep_nearer`, the tie rule
 //! included), and its hit becomes an [`Interaction`] by the same code, instances and masks
-//! included.
+//! included. A triangle is tested against the lanes that reach it four at a time
+//! ([`intersect_lanes`], the single ray's test in lanes), as are the occlusion packets'.
 
-use super::{Interaction, Scene, NO_HIT};
+use super::{take_nearer, Interaction, Scene, NO_HIT, SPHERE};
 use crate::accel::{RayPacket, PACKET};
-use crate::simd::lanes_of;
+use crate::geometry::triangle::intersect_lanes;
+use crate::geometry::{Ray, Triangle};
+use crate::simd::{lanes_of, Vector3, V3};
+use glam::{Vec3A, Vec4};
 
 impl Scene {
     /// The closest hits of the lanes of `active` of `pk` into `out` by lane (the other lanes
@@ -80,14 +84,123 @@ impl Scene {
         self.bvh
             .closest_packet_with(pk, active, lanes, |i, lanes, t_max| {
                 let mut nearer = 0;
-                for l in lanes_of(lanes) {
+                let mut take = |l: usize, hit| {
                     let keep = |i, u, v, t| keep(l, i, u, v, t);
-                    if let Some(t) = self.keep_nearer(&pk.ray(l), &mut best[l], i, t_max[l], &keep)
-                    {
+                    if let Some(t) = take_nearer(&mut best[l], i, hit, t_max[l], &keep) {
                         (t_max[l], nearer) = (t, nearer | 1 << l);
                     }
+                };
+                // SAFETY: the BVH's leaves name primitives below tris.len() (Scene::build).
+                let idx = unsafe { *self.tris.get_unchecked(i) };
+                if idx[0] == SPHERE || lanes & (lanes - 1) == 0 {
+                    for l in lanes_of(lanes) {
+                        if let Some(hit) = self.hit(&pk.ray(l), i, f32::INFINITY) {
+                            take(l, hit);
+                        }
+                    }
+                } else {
+                    self.triangle_hits(idx, pk, None, lanes, take);
                 }
                 nearer
             })
+    }
+
+    /// The lanes of `lanes` whose rays primitive `i` blocks before their `t_max`: the rays
+    /// of `pk`, or from `origins` in the directions of `pk`.
+    #[inline(always)]
+    pub(super) fn packet_hits(
+        &self,
+        pk: &RayPacket,
+        origins: Option<&[[f32; PACKET]; 3]>,
+        i: usize,
+        lanes: u32,
+    ) -> u32 {
+        let ray = |l| ray_of(pk, origins, l);
+        let each = |hit: &dyn Fn(usize) -> bool| {
+            lanes_of(lanes).fold(0, |hits, l| hits | (hit(l) as u32) << l)
+        };
+        if self.masked && self.has_opacity(i) {
+            return each(&|l| self.blocks_seen(&ray(l), i, pk.t_max[l]));
+        }
+        // SAFETY: the BVH's leaves name primitives below tris.len() (Scene::build).
+        let idx = unsafe { *self.tris.get_unchecked(i) };
+        match (idx[0] == SPHERE, origins) {
+            (false, _) if lanes & (lanes - 1) != 0 => {
+                let mut hits = 0;
+                self.triangle_hits(idx, pk, origins, lanes, |l, (t, _, _)| {
+                    hits |= ((t < pk.t_max[l]) as u32) << l;
+                });
+                hits
+            }
+            (true, None) => {
+                // Rays from one origin, four at a time.
+                let sphere = &self.spheres[idx[1] as usize];
+                let mut hits = 0;
+                for h in (0..PACKET).step_by(4) {
+                    let m = (lanes >> h) & 15;
+                    if m != 0 {
+                        let d = std::array::from_fn(|k| Vec4::from_slice(&pk.d[k][h..h + 4]));
+                        let t_max = Vec4::from_slice(&pk.t_max[h..h + 4]);
+                        hits |= (sphere.occludes4(pk.o, d, t_max) & m) << h;
+                    }
+                }
+                hits
+            }
+            _ => each(&|l| self.hit(&ray(l), i, pk.t_max[l]).is_some()),
+        }
+    }
+
+    /// Triangle `idx` (its vertex indices) against the rays of `lanes` (those of `pk`, or
+    /// from `origins` in the directions of `pk`), four at a time by [`intersect_lanes`]
+    /// and those it is unsure of one by one: `each(lane, (t, u, v))` gets the hit of every
+    /// lane that has one up to infinity, [`Scene::hit`]'s answer (its order of lanes is
+    /// not theirs).
+    #[inline(always)]
+    fn triangle_hits(
+        &self,
+        idx: [u32; 3],
+        pk: &RayPacket,
+        origins: Option<&[[f32; PACKET]; 3]>,
+        lanes: u32,
+        mut each: impl FnMut(usize, (f32, f32, f32)),
+    ) {
+        let p = idx.map(|k| self.vertex_fast(k));
+        let tri = Triangle::new(p[0], p[1], p[2]);
+        let p = p.map(V3::<Vec4>::broadcast);
+        // (Loaded in place: `pk.d.map` would copy the whole arrays first.)
+        let four = |a: &[[f32; PACKET]; 3], h: usize| {
+            V3::new(
+                Vec4::from_slice(&a[0][h..h + 4]),
+                Vec4::from_slice(&a[1][h..h + 4]),
+                Vec4::from_slice(&a[2][h..h + 4]),
+            )
+        };
+        let shared = V3::broadcast(pk.o);
+        for h in (0..PACKET).step_by(4) {
+            let m = (lanes >> h) & 15;
+            if m == 0 {
+                continue;
+            }
+            let o = origins.map_or(shared, |o| four(o, h));
+            let r = intersect_lanes(p, o, four(&pk.d, h));
+            let ahead = r.t.cmpgt(Vec4::ZERO) & r.t.cmplt(Vec4::INFINITY);
+            for k in lanes_of((r.clear & ahead).bitmask() & m) {
+                each(h + k, (r.t[k], r.u[k], r.v[k]));
+            }
+            for k in lanes_of(r.unsure.bitmask() & m) {
+                if let Some(hit) = tri.intersect(&ray_of(pk, origins, h + k), f32::INFINITY) {
+                    each(h + k, hit);
+                }
+            }
+        }
+    }
+}
+
+/// Lane `l`'s ray: of `pk`, or from `origins` in `pk`'s direction.
+#[inline(always)]
+fn ray_of(pk: &RayPacket, origins: Option<&[[f32; PACKET]; 3]>, l: usize) -> Ray {
+    match origins {
+        Some(o) => Ray::new(Vec3A::new(o[0][l], o[1][l], o[2][l]), pk.ray(l).d),
+        None => pk.ray(l),
     }
 }
