@@ -92,7 +92,7 @@ impl Scene {
                 };
                 // SAFETY: the BVH's leaves name primitives below tris.len() (Scene::build).
                 let idx = unsafe { *self.tris.get_unchecked(i) };
-                if idx[0] == SPHERE || lanes & (lanes - 1) == 0 {
+                if idx[0] == SPHERE || lanes.is_power_of_two() {
                     for l in lanes_of(lanes) {
                         if let Some(hit) = self.hit(&pk.ray(l), i, f32::INFINITY) {
                             take(l, hit);
@@ -125,7 +125,7 @@ impl Scene {
         // SAFETY: the BVH's leaves name primitives below tris.len() (Scene::build).
         let idx = unsafe { *self.tris.get_unchecked(i) };
         match (idx[0] == SPHERE, origins) {
-            (false, _) if lanes & (lanes - 1) != 0 => {
+            (false, _) if !lanes.is_power_of_two() => {
                 let mut hits = 0;
                 self.triangle_hits(idx, pk, origins, lanes, |l, (t, _, _)| {
                     hits |= ((t < pk.t_max[l]) as u32) << l;
