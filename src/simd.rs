@@ -11,6 +11,9 @@
 //! construction. The functions built on them are `#[inline(always)]`, so that they are
 //! compiled into their callers with the callers' target features (a call would lose them).
 
+#[cfg(target_arch = "x86_64")]
+pub(crate) mod avx512;
+
 use glam::{BVec4A, Vec3, Vec3A, Vec4};
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 

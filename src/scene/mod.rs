@@ -548,9 +548,9 @@ impl Scene {
     /// answers each way, which the tests check by choosing.
     #[inline]
     pub fn occluded_packet_with(&self, pk: &RayPacket, active: u32, lanes: usize) -> u32 {
-        let hits = self
-            .bvh
-            .occluded_packet_with(pk, active, lanes, |i, m| self.packet_hits(pk, None, i, m));
+        let hits = self.bvh.occluded_packet_with(pk, active, lanes, |i, m| {
+            self.packet_hits(pk, None, i, m, lanes == PACKET)
+        });
         match &self.instances {
             Some(inst) if hits != active => {
                 hits | inst.occluded_packet_with(pk, active & !hits, lanes)
@@ -609,7 +609,7 @@ impl Scene {
                 pk.t_max[k] = t_max[k];
             }
             self.bvh.occluded_origins(&o, &pk, all, lanes, |i, m| {
-                self.packet_hits(&pk, Some(&o), i, m)
+                self.packet_hits(&pk, Some(&o), i, m, lanes == PACKET)
             })
         };
         match &self.instances {

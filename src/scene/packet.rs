@@ -81,6 +81,7 @@ impl Scene {
         best: &mut [(usize, f32, f32, f32); PACKET],
         keep: impl Fn(usize, usize, f32, f32, f32) -> bool,
     ) -> u32 {
+        let wide = lanes == PACKET;
         self.bvh
             .closest_packet_with(pk, active, lanes, |i, lanes, t_max| {
                 let mut nearer = 0;
@@ -99,14 +100,15 @@ impl Scene {
                         }
                     }
                 } else {
-                    self.triangle_hits(idx, pk, None, lanes, take);
+                    self.triangle_hits(idx, pk, None, lanes, wide, take);
                 }
                 nearer
             })
     }
 
     /// The lanes of `lanes` whose rays primitive `i` blocks before their `t_max`: the rays
-    /// of `pk`, or from `origins` in the directions of `pk`.
+    /// of `pk`, or from `origins` in the directions of `pk`; `wide` as for
+    /// `Scene::triangle_hits`.
     #[inline(always)]
     pub(super) fn packet_hits(
         &self,
@@ -114,6 +116,7 @@ impl Scene {
         origins: Option<&[[f32; PACKET]; 3]>,
         i: usize,
         lanes: u32,
+        wide: bool,
     ) -> u32 {
         let ray = |l| ray_of(pk, origins, l);
         let each = |hit: &dyn Fn(usize) -> bool| {
@@ -127,7 +130,7 @@ impl Scene {
         match (idx[0] == SPHERE, origins) {
             (false, _) if !lanes.is_power_of_two() => {
                 let mut hits = 0;
-                self.triangle_hits(idx, pk, origins, lanes, |l, (t, _, _)| {
+                self.triangle_hits(idx, pk, origins, lanes, wide, |l, (t, _, _)| {
                     hits |= ((t < pk.t_max[l]) as u32) << l;
                 });
                 hits
@@ -151,10 +154,12 @@ impl Scene {
     }
 
     /// Triangle `idx` (its vertex indices) against the rays of `lanes` (those of `pk`, or
-    /// from `origins` in the directions of `pk`), four at a time by [`intersect_lanes`]
-    /// and those it is unsure of one by one: `each(lane, (t, u, v))` gets the hit of every
-    /// lane that has one up to infinity, [`Scene::hit`]'s answer (its order of lanes is
-    /// not theirs).
+    /// from `origins` in the directions of `pk`) by [`intersect_lanes`], sixteen at once
+    /// where `wide` and the CPU has AVX-512, else four at a time, and those it is unsure
+    /// of one by one: `each(lane, (t, u, v))` gets the hit of every lane that has one up to
+    /// infinity, [`Scene::hit`]'s answer (its order of lanes is not theirs). (The packets'
+    /// callers pass `wide` where their box tests take sixteen lanes, so that the tests,
+    /// which choose those, reach both forms on any host.)
     #[inline(always)]
     fn triangle_hits(
         &self,
@@ -162,10 +167,31 @@ impl Scene {
         pk: &RayPacket,
         origins: Option<&[[f32; PACKET]; 3]>,
         lanes: u32,
+        wide: bool,
         mut each: impl FnMut(usize, (f32, f32, f32)),
     ) {
         let p = idx.map(|k| self.vertex_fast(k));
         let tri = Triangle::new(p[0], p[1], p[2]);
+        // Lanes `base + k` of a pass: its clear hits as they are, its unsure lanes to `tri`.
+        let mut give = |base: usize, clear: u32, unsure: u32, tuv: [&[f32]; 3]| {
+            for k in lanes_of(clear) {
+                each(base + k, (tuv[0][k], tuv[1][k], tuv[2][k]));
+            }
+            for k in lanes_of(unsure) {
+                let ray = ray_of(pk, origins, base + k);
+                if let Some(hit) = tri.intersect(&ray, f32::INFINITY) {
+                    each(base + k, hit);
+                }
+            }
+        };
+        #[cfg(target_arch = "x86_64")]
+        if wide && crate::cpu::avx512() {
+            // SAFETY: `cpu::avx512` found AVX-512F.
+            let r = unsafe { sixteen(tri, pk, origins) };
+            let (clear, unsure) = (u32::from(r.clear) & lanes, u32::from(r.unsure) & lanes);
+            give(0, clear, unsure, [&r.t, &r.u, &r.v]);
+            return;
+        }
         let p = p.map(V3::<Vec4>::broadcast);
         // (Loaded in place: `pk.d.map` would copy the whole arrays first.)
         let four = |a: &[[f32; PACKET]; 3], h: usize| {
@@ -184,14 +210,9 @@ impl Scene {
             let o = origins.map_or(shared, |o| four(o, h));
             let r = intersect_lanes(p, o, four(&pk.d, h));
             let ahead = r.t.cmpgt(Vec4::ZERO) & r.t.cmplt(Vec4::INFINITY);
-            for k in lanes_of((r.clear & ahead).bitmask() & m) {
-                each(h + k, (r.t[k], r.u[k], r.v[k]));
-            }
-            for k in lanes_of(r.unsure.bitmask() & m) {
-                if let Some(hit) = tri.intersect(&ray_of(pk, origins, h + k), f32::INFINITY) {
-                    each(h + k, hit);
-                }
-            }
+            let (clear, unsure) = ((r.clear & ahead).bitmask() & m, r.unsure.bitmask() & m);
+            let tuv = [r.t.to_array(), r.u.to_array(), r.v.to_array()];
+            give(h, clear, unsure, [&tuv[0], &tuv[1], &tuv[2]]);
         }
     }
 }
@@ -202,5 +223,47 @@ fn ray_of(pk: &RayPacket, origins: Option<&[[f32; PACKET]; 3]>, l: usize) -> Ray
     match origins {
         Some(o) => Ray::new(Vec3A::new(o[0][l], o[1][l], o[2][l]), pk.ray(l).d),
         None => pk.ray(l),
+    }
+}
+
+/// [`intersect_lanes`] of all sixteen lanes of `pk` (or from `origins` in its directions)
+/// against `tri` at once, in one AVX-512 register: distances and barycentrics by lane, the
+/// clear lanes that hit (0 < t < ∞) and the unsure ones, as bits.
+#[cfg(target_arch = "x86_64")]
+struct Sixteen {
+    t: [f32; PACKET],
+    u: [f32; PACKET],
+    v: [f32; PACKET],
+    clear: u16,
+    unsure: u16,
+}
+
+/// See [`Sixteen`].
+///
+/// # Safety
+/// The CPU must have AVX-512F.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn sixteen(tri: Triangle, pk: &RayPacket, origins: Option<&[[f32; PACKET]; 3]>) -> Sixteen {
+    use crate::simd::{avx512::F, Float};
+    // (Written out: a closure would be compiled without this function's features.)
+    let p = [
+        V3::<F>::broadcast(tri.p0),
+        V3::broadcast(tri.p1),
+        V3::broadcast(tri.p2),
+    ];
+    let o = match origins {
+        Some(o) => V3::new(F::load(&o[0]), F::load(&o[1]), F::load(&o[2])),
+        None => V3::broadcast(pk.o),
+    };
+    let d = V3::new(F::load(&pk.d[0]), F::load(&pk.d[1]), F::load(&pk.d[2]));
+    let r = intersect_lanes(p, o, d);
+    let ahead = r.t.gt(F::zero()) & r.t.lt(F::splat(f32::INFINITY));
+    Sixteen {
+        t: r.t.to_array(),
+        u: r.u.to_array(),
+        v: r.v.to_array(),
+        clear: r.clear & ahead,
+        unsure: r.unsure,
     }
 }

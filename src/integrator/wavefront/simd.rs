@@ -1,7 +1,9 @@
-//! Sixteen f32 lanes in one AVX-512 register, with the operations the wavefront needs, each
-//! the IEEE operation the scalar code performs on one lane: no FMA, no reciprocal
-//! approximations, sums in the order glam writes them. So a lane computes the bits the scalar
-//! path computes for its path.
+//! Sixteen lanes in one AVX-512 register, with the operations the wavefront needs: the f32
+//! lanes of [`crate::simd::avx512`] (shared with the packets' triangle test) and what only
+//! the wavefront does with them (gathers, compressed stores, table lookups), u32 lanes and
+//! sixteen PCG32 streams. Each the IEEE operation the scalar code performs on one lane: no
+//! FMA, no reciprocal approximations, sums in the order glam writes them. So a lane computes
+//! the bits the scalar path computes for its path.
 //!
 //! The operator impls and methods are `#[inline(always)]` functions without target features
 //! that call the intrinsics; inlined into the wavefront's functions compiled for AVX-512
@@ -14,16 +16,10 @@
 //! where `Backend::detect` found the features. `simd_avx2.rs` is the same interface on AVX2.
 
 use crate::sampler::Uint;
+pub use crate::simd::avx512::{F, M};
 use crate::simd::Float;
 use std::arch::x86_64::*;
-use std::ops::{Add, BitAnd, BitOr, BitXor, Div, Mul, Neg, Sub};
-
-/// A mask of lanes, bit i for lane i.
-pub type M = u16;
-
-/// Sixteen f32 lanes.
-#[derive(Clone, Copy)]
-pub struct F(pub __m512);
+use std::ops::{BitAnd, BitOr, BitXor};
 
 /// Sixteen u32 lanes.
 #[derive(Clone, Copy)]
@@ -34,20 +30,6 @@ pub struct U(pub __m512i);
 // but the arrays they are given.
 
 impl F {
-    #[inline(always)]
-    pub fn load(a: &[f32; 16]) -> F {
-        F(unsafe { _mm512_loadu_ps(a.as_ptr()) })
-    }
-    #[inline(always)]
-    pub fn store(self, a: &mut [f32; 16]) {
-        unsafe { _mm512_storeu_ps(a.as_mut_ptr(), self.0) }
-    }
-    #[inline(always)]
-    pub fn to_array(self) -> [f32; 16] {
-        let mut a = [0.0; 16];
-        self.store(&mut a);
-        a
-    }
     #[inline(always)]
     pub fn is_nan(self) -> M {
         unsafe { _mm512_cmp_ps_mask::<_CMP_UNORD_Q>(self.0, self.0) }
@@ -94,127 +76,6 @@ impl F {
             let upper = _mm512_test_epi32_mask(idx.0, _mm512_set1_epi32(32));
             F(_mm512_mask_blend_ps(upper, lo, hi))
         }
-    }
-}
-
-impl Float for F {
-    type Mask = M;
-    #[inline(always)]
-    fn any(m: M) -> bool {
-        m != 0
-    }
-    #[inline(always)]
-    fn splat(x: f32) -> F {
-        F(unsafe { _mm512_set1_ps(x) })
-    }
-    #[inline(always)]
-    fn sqrt(self) -> F {
-        F(unsafe { _mm512_sqrt_ps(self.0) })
-    }
-    /// |x|: the sign bit cleared, as `f32::abs` and glam's `abs`.
-    #[inline(always)]
-    fn abs(self) -> F {
-        F(unsafe {
-            _mm512_castsi512_ps(_mm512_and_si512(
-                _mm512_castps_si512(self.0),
-                _mm512_set1_epi32(0x7fff_ffff),
-            ))
-        })
-    }
-    /// `f32::max` against a number `o` that is not NaN: `o` where `self` is NaN (x86's
-    /// `maxps` gives its second operand where either is NaN). (Where the two are zeros of
-    /// opposite signs either may come out, as for `f32::max`; no caller tells them apart.)
-    #[inline(always)]
-    fn max_num(self, o: F) -> F {
-        F(unsafe { _mm512_max_ps(self.0, o.0) })
-    }
-    /// `f32::min` against a number `o` that is not NaN: `o` where `self` is NaN.
-    #[inline(always)]
-    fn min_num(self, o: F) -> F {
-        F(unsafe { _mm512_min_ps(self.0, o.0) })
-    }
-    /// `x < o`, false for NaN.
-    #[inline(always)]
-    fn lt(self, o: F) -> M {
-        unsafe { _mm512_cmp_ps_mask::<_CMP_LT_OQ>(self.0, o.0) }
-    }
-    /// `x <= o`, false for NaN.
-    #[inline(always)]
-    fn le(self, o: F) -> M {
-        unsafe { _mm512_cmp_ps_mask::<_CMP_LE_OQ>(self.0, o.0) }
-    }
-    /// `x > o`, false for NaN.
-    #[inline(always)]
-    fn gt(self, o: F) -> M {
-        unsafe { _mm512_cmp_ps_mask::<_CMP_GT_OQ>(self.0, o.0) }
-    }
-    /// `x >= o`, false for NaN.
-    #[inline(always)]
-    fn ge(self, o: F) -> M {
-        unsafe { _mm512_cmp_ps_mask::<_CMP_GE_OQ>(self.0, o.0) }
-    }
-    /// `x == o`, false for NaN.
-    #[inline(always)]
-    fn eq(self, o: F) -> M {
-        unsafe { _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(self.0, o.0) }
-    }
-    /// `a` where `m`, else `b`.
-    #[inline(always)]
-    fn select(m: M, a: F, b: F) -> F {
-        F(unsafe { _mm512_mask_blend_ps(m, b.0, a.0) })
-    }
-    /// `self.copysign(sign)`: the magnitude of `self` with the sign bit of `sign`.
-    #[inline(always)]
-    fn copysign(self, sign: F) -> F {
-        unsafe {
-            let s = _mm512_and_si512(_mm512_castps_si512(sign.0), _mm512_set1_epi32(i32::MIN));
-            F(_mm512_castsi512_ps(_mm512_or_si512(
-                s,
-                _mm512_castps_si512(self.abs().0),
-            )))
-        }
-    }
-}
-
-impl Add for F {
-    type Output = F;
-    #[inline(always)]
-    fn add(self, o: F) -> F {
-        F(unsafe { _mm512_add_ps(self.0, o.0) })
-    }
-}
-impl Sub for F {
-    type Output = F;
-    #[inline(always)]
-    fn sub(self, o: F) -> F {
-        F(unsafe { _mm512_sub_ps(self.0, o.0) })
-    }
-}
-impl Mul for F {
-    type Output = F;
-    #[inline(always)]
-    fn mul(self, o: F) -> F {
-        F(unsafe { _mm512_mul_ps(self.0, o.0) })
-    }
-}
-impl Div for F {
-    type Output = F;
-    #[inline(always)]
-    fn div(self, o: F) -> F {
-        F(unsafe { _mm512_div_ps(self.0, o.0) })
-    }
-}
-impl Neg for F {
-    type Output = F;
-    /// The sign bit flipped, as Rust's `-x` and glam's `neg`.
-    #[inline(always)]
-    fn neg(self) -> F {
-        F(unsafe {
-            _mm512_castsi512_ps(_mm512_xor_si512(
-                _mm512_castps_si512(self.0),
-                _mm512_set1_epi32(i32::MIN),
-            ))
-        })
     }
 }
 
