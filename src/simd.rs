@@ -2,9 +2,11 @@
 //! numbers, one or many lanes) and [`Vector3`] (three-component vectors of them).
 //!
 //! A formula written over these traits is compiled for the scalar path tracer with `f32`
-//! (one lane, mask `bool`) and glam's `Vec3A`, and for the wavefront
-//! ([`crate::integrator::wavefront`]) with its sixteen-lane `F` and `V3` under AVX-512 or
-//! AVX2 — the manner of Mitsuba 3, whose plugins are one source compiled to scalar and
+//! (one lane, mask `bool`) and glam's `Vec3A`, for four lanes with glam's `Vec4` (the
+//! packets' triangle and sphere tests), and for sixteen: the wavefront
+//! ([`crate::integrator::wavefront`]) with its `F` and `V3` under AVX-512 (`avx512`, which
+//! the packets' triangle test shares) or AVX2 — the manner of Mitsuba 3, whose plugins are
+//! one source compiled to scalar and
 //! vector variants by Dr.Jit. Every operation is the IEEE operation of the same name lane by
 //! lane (no fused multiply-add, no approximations), and a branch is a `select` of both sides,
 //! so each lane of a vector instance computes exactly the scalar instance's bits: equal by
