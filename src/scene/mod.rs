@@ -548,8 +548,9 @@ impl Scene {
     /// answers each way, which the tests check by choosing.
     #[inline]
     pub fn occluded_packet_with(&self, pk: &RayPacket, active: u32, lanes: usize) -> u32 {
+        let wide = packet::sixteen_wide(lanes);
         let hits = self.bvh.occluded_packet_with(pk, active, lanes, |i, m| {
-            self.packet_hits(pk, None, i, m, lanes == PACKET)
+            self.packet_hits(pk, None, i, m, wide)
         });
         match &self.instances {
             Some(inst) if hits != active => {
@@ -608,8 +609,9 @@ impl Scene {
                 (pk.d[0][k], pk.d[1][k], pk.d[2][k]) = (r.d.x, r.d.y, r.d.z);
                 pk.t_max[k] = t_max[k];
             }
+            let wide = packet::sixteen_wide(lanes);
             self.bvh.occluded_origins(&o, &pk, all, lanes, |i, m| {
-                self.packet_hits(&pk, Some(&o), i, m, lanes == PACKET)
+                self.packet_hits(&pk, Some(&o), i, m, wide)
             })
         };
         match &self.instances {

@@ -81,7 +81,7 @@ impl Scene {
         best: &mut [(usize, f32, f32, f32); PACKET],
         keep: impl Fn(usize, usize, f32, f32, f32) -> bool,
     ) -> u32 {
-        let wide = lanes == PACKET;
+        let wide = sixteen_wide(lanes);
         self.bvh
             .closest_packet_with(pk, active, lanes, |i, lanes, t_max| {
                 let mut nearer = 0;
@@ -155,11 +155,9 @@ impl Scene {
 
     /// Triangle `idx` (its vertex indices) against the rays of `lanes` (those of `pk`, or
     /// from `origins` in the directions of `pk`) by [`intersect_lanes`], sixteen at once
-    /// where `wide` and the CPU has AVX-512, else four at a time, and those it is unsure
+    /// where `wide` ([`sixteen_wide`]), else four at a time, and those it is unsure
     /// of one by one: `each(lane, (t, u, v))` gets the hit of every lane that has one up to
-    /// infinity, [`Scene::hit`]'s answer (its order of lanes is not theirs). (The packets'
-    /// callers pass `wide` where their box tests take sixteen lanes, so that the tests,
-    /// which choose those, reach both forms on any host.)
+    /// infinity, [`Scene::hit`]'s answer (its order of lanes is not theirs).
     #[inline(always)]
     fn triangle_hits(
         &self,
@@ -185,8 +183,9 @@ impl Scene {
             }
         };
         #[cfg(target_arch = "x86_64")]
-        if wide && crate::cpu::avx512() {
-            // SAFETY: `cpu::avx512` found AVX-512F.
+        if wide {
+            // SAFETY: `wide` is `sixteen_wide`'s, which `cpu::avx512` made true only where
+            // the CPU has AVX-512F.
             let r = unsafe { sixteen(tri, pk, origins) };
             let (clear, unsure) = (u32::from(r.clear) & lanes, u32::from(r.unsure) & lanes);
             give(0, clear, unsure, [&r.t, &r.u, &r.v]);
@@ -215,6 +214,18 @@ impl Scene {
             give(h, clear, unsure, [&tuv[0], &tuv[1], &tuv[2]]);
         }
     }
+}
+
+/// Whether a packet whose box tests take `lanes` lanes tests its triangles sixteen lanes at
+/// once: where the box tests are sixteen wide and the CPU has AVX-512 (`cpu::avx512`, read
+/// once a packet rather than a triangle). Tied to the box tests' width so that the tests,
+/// which choose that width, reach both forms on an AVX-512 host.
+#[inline(always)]
+pub(super) fn sixteen_wide(lanes: usize) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    return lanes == PACKET && crate::cpu::avx512();
+    #[cfg(not(target_arch = "x86_64"))]
+    return false;
 }
 
 /// Lane `l`'s ray: of `pk`, or from `origins` in `pk`'s direction.
