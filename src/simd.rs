@@ -14,6 +14,8 @@
 //! compiled into their callers with the callers' target features (a call would lose them).
 
 #[cfg(target_arch = "x86_64")]
+pub(crate) mod avx2;
+#[cfg(target_arch = "x86_64")]
 pub(crate) mod avx512;
 
 use glam::{BVec4A, Vec3, Vec3A, Vec4};
@@ -83,6 +85,20 @@ pub trait Float:
     fn select(m: Self::Mask, a: Self, b: Self) -> Self;
     /// Whether any lane of `m` is set (for early exits that skip work no lane needs).
     fn any(m: Self::Mask) -> bool;
+}
+
+/// Sixteen f32 lanes in registers ([`avx512::F`], [`avx2::F`]): what code written once for
+/// either needs besides [`Float`].
+#[cfg(target_arch = "x86_64")]
+pub trait Sixteen: Float {
+    fn load(a: &[f32; 16]) -> Self;
+    fn to_array(self) -> [f32; 16];
+    /// The lanes of `m` as bits, bit i for lane i.
+    fn bits(m: Self::Mask) -> u32;
+    /// `first + i` in lane i.
+    fn iota(first: f32) -> Self;
+    /// The least lane of `t` (none NaN), and of the lanes that hold it the least `key`.
+    fn min_by_key(t: Self, key: Self) -> (f32, f32);
 }
 
 /// Three-component vectors of [`Float`] lanes, with glam's order of operations (the dot

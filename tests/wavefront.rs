@@ -29,9 +29,11 @@ fn cpu_runs_it() -> bool {
     ok
 }
 
-/// Whether the CPU runs the AVX-512 backend, so that the AVX2 one is compared as well.
+/// Whether the CPU runs the AVX-512 backend (and `MCRT_MAX_ISA` does not cap it), so that
+/// the AVX2 one is compared as well.
 fn cpu_has_avx512() -> bool {
-    std::arch::is_x86_feature_detected!("avx512f")
+    mcrt::cpu::avx512()
+        && std::arch::is_x86_feature_detected!("avx512f")
         && std::arch::is_x86_feature_detected!("avx512dq")
         && std::arch::is_x86_feature_detected!("bmi2")
 }

@@ -22,9 +22,9 @@
 //! the example scenes both ways), whichever kernel the CPU runs (AVX-512 or AVX, which give
 //! the same bits), and whether the integrator runs its portable or its x86-64-v3 code.
 
-use crate::geometry::triangle_block::{splat16, splat8, TriangleBlock, LANES};
+use crate::geometry::triangle_block::{TriangleBlock, LANES};
 use crate::geometry::{Ray, Triangle};
-use std::arch::x86_64::*;
+use crate::simd::{avx2, avx512, Sixteen, Vector3, V3};
 
 /// Most triangles traced by brute force with AVX-512. `cargo bench --bench flat` found it
 /// faster than the BVH at every size up to this one (docs/performance.md).
@@ -238,63 +238,28 @@ impl Flat {
     // hot loop (the path, compiled for x86-64-v3) keeps its registers.
     #[inline(never)]
     #[target_feature(enable = "avx,avx512f")]
-    unsafe fn intersect16<F>(
-        &self,
-        ray: &Ray,
-        t_max: f32,
-        mut hit: F,
-    ) -> Option<(usize, f32, f32, f32)>
+    unsafe fn intersect16<F>(&self, ray: &Ray, t_max: f32, hit: F) -> Option<(usize, f32, f32, f32)>
     where
         F: FnMut(usize, f32) -> Option<(f32, f32, f32)>,
     {
-        let sphere = self.nearest_sphere(t_max, &mut hit);
-        let t_max = Self::triangle_bound(&sphere, t_max);
-        let r = splat16(ray);
-        let (mut bt, mut bu, mut bv) = (
-            _mm512_set1_ps(t_max),
-            _mm512_setzero_ps(),
-            _mm512_setzero_ps(),
-        );
-        let mut bslot = _mm512_setzero_si512();
-        let iota = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-        let mut unsure_all = 0u64;
-        for (k, b) in self.blocks.iter().enumerate() {
-            let lanes = self.lanes(k);
-            let (hits, unsure, [t, u, v]) = b.test16(&r, bt);
-            // (Lanes past the last triangle hold NaN and are never hit; only their
-            // `unsure` bits need masking.)
-            let m = hits as __mmask16;
-            unsure_all |= ((unsure & lanes) as u64) << (LANES * k);
-            bt = _mm512_mask_blend_ps(m, bt, t);
-            bu = _mm512_mask_blend_ps(m, bu, u);
-            bv = _mm512_mask_blend_ps(m, bv, v);
-            let slots = _mm512_add_epi32(iota, _mm512_set1_epi32((LANES * k) as i32));
-            bslot = _mm512_mask_blend_epi32(m, bslot, slots);
-        }
-        let tmin = _mm512_reduce_min_ps(bt);
-        let mut best = (usize::MAX, t_max, 0.0, 0.0);
-        if tmin < t_max {
-            // Of the lanes as near as the nearest, the first slot.
-            let at = _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(bt, _mm512_set1_ps(tmin));
-            let slot = _mm512_mask_reduce_min_epi32(at, bslot) as usize;
-            let (mut u, mut v) = ([0f32; LANES], [0f32; LANES]);
-            _mm512_storeu_ps(u.as_mut_ptr(), bu);
-            _mm512_storeu_ps(v.as_mut_ptr(), bv);
-            best = (slot, tmin, u[slot % LANES], v[slot % LANES]);
-        }
-        if unsure_all != 0 {
-            best = self.settle(unsure_all, t_max, best, &mut hit);
-        }
-        self.result(sphere, best)
+        self.nearest::<avx512::F, F>(ray, t_max, hit)
     }
 
     /// # Safety
     /// The CPU must have AVX.
-    // Not inlined: a call per ray costs nothing next to the blocks, and the caller's
-    // hot loop (the path, compiled for x86-64-v3) keeps its registers.
+    // (Not inlined, as `intersect16`.)
     #[inline(never)]
     #[target_feature(enable = "avx")]
-    unsafe fn intersect8<F>(
+    unsafe fn intersect8<F>(&self, ray: &Ray, t_max: f32, hit: F) -> Option<(usize, f32, f32, f32)>
+    where
+        F: FnMut(usize, f32) -> Option<(f32, f32, f32)>,
+    {
+        self.nearest::<avx2::F, F>(ray, t_max, hit)
+    }
+
+    /// [`Flat::intersect`] in the lanes of `T`, compiled into a caller with its features.
+    #[inline(always)]
+    fn nearest<T: Sixteen, F>(
         &self,
         ray: &Ray,
         t_max: f32,
@@ -305,53 +270,32 @@ impl Flat {
     {
         let sphere = self.nearest_sphere(t_max, &mut hit);
         let t_max = Self::triangle_bound(&sphere, t_max);
-        let r = splat8(ray);
-        let (mut bt, mut bu, mut bv) = (
-            _mm256_set1_ps(t_max),
-            _mm256_setzero_ps(),
-            _mm256_setzero_ps(),
-        );
-        // Slots as f32 bit patterns, blended as the floats are (AVX has no integer blend).
-        let mut bslot = _mm256_setzero_ps();
+        let (o, d) = (V3::<T>::broadcast(ray.o), V3::broadcast(ray.d));
+        let (mut bt, mut bu, mut bv) = (T::splat(t_max), T::zero(), T::zero());
+        // Each lane's slot (16·block + lane) as an f32 (exact: fewer than 2²⁴), selected as
+        // the distances are.
+        let mut bslot = T::zero();
         let mut unsure_all = 0u64;
         for (k, b) in self.blocks.iter().enumerate() {
-            let lanes = self.lanes(k);
-            for half in 0..2 {
-                let l = (lanes >> (8 * half)) & 0xff;
-                if l == 0 {
-                    break;
-                }
-                let (hits, unsure, [t, u, v]) = b.test8(&r, bt, half);
-                let m = hits; // (NaN lanes past the last triangle are never hit.)
-                unsure_all |= ((unsure & l) as u64) << (LANES * k + 8 * half);
-                bt = _mm256_blendv_ps(bt, t, m);
-                bu = _mm256_blendv_ps(bu, u, m);
-                bv = _mm256_blendv_ps(bv, v, m);
-                let first = (LANES * k + 8 * half) as i32;
-                let slots = _mm256_castsi256_ps(_mm256_setr_epi32(
-                    first,
-                    first + 1,
-                    first + 2,
-                    first + 3,
-                    first + 4,
-                    first + 5,
-                    first + 6,
-                    first + 7,
-                ));
-                bslot = _mm256_blendv_ps(bslot, slots, m);
-            }
+            let (hits, unsure, [t, u, v]) = b.test(o, d, bt);
+            // (Lanes past the last triangle hold NaN and are never hit; only their
+            // `unsure` bits need masking.)
+            unsure_all |= u64::from(T::bits(unsure) & self.lanes(k)) << (LANES * k);
+            bt = T::select(hits, t, bt);
+            bu = T::select(hits, u, bu);
+            bv = T::select(hits, v, bv);
+            bslot = T::select(hits, T::iota((LANES * k) as f32), bslot);
         }
-        let (mut t, mut u, mut v, mut s) = ([0f32; 8], [0f32; 8], [0f32; 8], [0f32; 8]);
-        _mm256_storeu_ps(t.as_mut_ptr(), bt);
-        _mm256_storeu_ps(u.as_mut_ptr(), bu);
-        _mm256_storeu_ps(v.as_mut_ptr(), bv);
-        _mm256_storeu_ps(s.as_mut_ptr(), bslot);
         let mut best = (usize::MAX, t_max, 0.0, 0.0);
-        for l in 0..8 {
-            let slot = s[l].to_bits() as usize;
-            if t[l] < best.1 || (t[l] == best.1 && t[l] < t_max && slot < best.0) {
-                best = (slot, t[l], u[l], v[l]);
-            }
+        let (t, slot) = T::min_by_key(bt, bslot);
+        if t < t_max {
+            let slot = slot as usize;
+            best = (
+                slot,
+                t,
+                bu.to_array()[slot % LANES],
+                bv.to_array()[slot % LANES],
+            );
         }
         if unsure_all != 0 {
             best = self.settle(unsure_all, t_max, best, &mut hit);
@@ -361,40 +305,31 @@ impl Flat {
 
     /// # Safety
     /// The CPU must have AVX-512F.
-    // Not inlined: a call per ray costs nothing next to the blocks, and the caller's
-    // hot loop (the path, compiled for x86-64-v3) keeps its registers.
+    // (Not inlined, as `intersect16`.)
     #[inline(never)]
     #[target_feature(enable = "avx,avx512f")]
-    unsafe fn occluded16<F>(&self, ray: &Ray, t_max: f32, mut hit: F) -> bool
+    unsafe fn occluded16<F>(&self, ray: &Ray, t_max: f32, hit: F) -> bool
     where
         F: FnMut(usize, f32) -> Option<(f32, f32, f32)>,
     {
-        if self
-            .spheres
-            .iter()
-            .any(|&p| hit(p as usize, t_max).is_some())
-        {
-            return true;
-        }
-        let r = splat16(ray);
-        let tm = _mm512_set1_ps(t_max);
-        let (mut any, mut unsure_all) = (0u32, 0u64);
-        for (k, b) in self.blocks.iter().enumerate() {
-            let lanes = self.lanes(k);
-            let (hits, unsure, _) = b.test16(&r, tm);
-            any |= hits;
-            unsure_all |= ((unsure & lanes) as u64) << (LANES * k);
-        }
-        any != 0 || self.any_unsure(unsure_all, t_max, &mut hit)
+        self.blocked::<avx512::F, F>(ray, t_max, hit)
     }
 
     /// # Safety
     /// The CPU must have AVX.
-    // Not inlined: a call per ray costs nothing next to the blocks, and the caller's
-    // hot loop (the path, compiled for x86-64-v3) keeps its registers.
+    // (Not inlined, as `intersect16`.)
     #[inline(never)]
     #[target_feature(enable = "avx")]
-    unsafe fn occluded8<F>(&self, ray: &Ray, t_max: f32, mut hit: F) -> bool
+    unsafe fn occluded8<F>(&self, ray: &Ray, t_max: f32, hit: F) -> bool
+    where
+        F: FnMut(usize, f32) -> Option<(f32, f32, f32)>,
+    {
+        self.blocked::<avx2::F, F>(ray, t_max, hit)
+    }
+
+    /// [`Flat::occluded`] in the lanes of `T`, compiled into a caller with its features.
+    #[inline(always)]
+    fn blocked<T: Sixteen, F>(&self, ray: &Ray, t_max: f32, mut hit: F) -> bool
     where
         F: FnMut(usize, f32) -> Option<(f32, f32, f32)>,
     {
@@ -405,20 +340,13 @@ impl Flat {
         {
             return true;
         }
-        let r = splat8(ray);
-        let tm = _mm256_set1_ps(t_max);
+        let (o, d) = (V3::<T>::broadcast(ray.o), V3::broadcast(ray.d));
+        let tm = T::splat(t_max);
         let (mut any, mut unsure_all) = (0u32, 0u64);
         for (k, b) in self.blocks.iter().enumerate() {
-            let lanes = self.lanes(k);
-            for half in 0..2 {
-                let l = (lanes >> (8 * half)) & 0xff;
-                if l == 0 {
-                    break;
-                }
-                let (hits, unsure, _) = b.test8(&r, tm, half);
-                any |= _mm256_movemask_ps(hits) as u32;
-                unsure_all |= ((unsure & l) as u64) << (LANES * k + 8 * half);
-            }
+            let (hits, unsure, _) = b.test(o, d, tm);
+            any |= T::bits(hits);
+            unsure_all |= u64::from(T::bits(unsure) & self.lanes(k)) << (LANES * k);
         }
         any != 0 || self.any_unsure(unsure_all, t_max, &mut hit)
     }

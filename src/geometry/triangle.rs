@@ -194,9 +194,21 @@ pub struct LaneHits<T: Float> {
 /// unsure `intersect` ends.
 #[inline(always)]
 pub fn intersect_lanes<T: Float>(p: [V3<T>; 3], o: V3<T>, d: V3<T>) -> LaneHits<T> {
-    let e1 = p[1] - p[0];
-    let e2 = p[2] - p[0];
-    let s = o - p[0];
+    intersect_lanes_edges(p[0], p[1] - p[0], p[2] - p[0], o, d)
+}
+
+/// [`intersect_lanes`] of the triangle with first vertex `p0` and edges `e1` = p1 − p0 and
+/// `e2` = p2 − p0 (as `intersect` subtracts them), for the callers that store the edges:
+/// the small scenes' brute force ([`crate::accel::flat`]) and the wavefront's.
+#[inline(always)]
+pub fn intersect_lanes_edges<T: Float>(
+    p0: V3<T>,
+    e1: V3<T>,
+    e2: V3<T>,
+    o: V3<T>,
+    d: V3<T>,
+) -> LaneHits<T> {
+    let s = o - p0;
     let pv = d.cross(e2);
     let q = s.cross(e1);
     let inv_det = T::splat(1.0) / e1.dot(pv);

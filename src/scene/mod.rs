@@ -548,9 +548,9 @@ impl Scene {
     /// answers each way, which the tests check by choosing.
     #[inline]
     pub fn occluded_packet_with(&self, pk: &RayPacket, active: u32, lanes: usize) -> u32 {
-        let wide = packet::sixteen_wide(lanes);
+        let width = packet::triangle_lanes(lanes);
         let hits = self.bvh.occluded_packet_with(pk, active, lanes, |i, m| {
-            self.packet_hits(pk, None, i, m, wide)
+            self.packet_hits(pk, None, i, m, width)
         });
         match &self.instances {
             Some(inst) if hits != active => {
@@ -609,9 +609,9 @@ impl Scene {
                 (pk.d[0][k], pk.d[1][k], pk.d[2][k]) = (r.d.x, r.d.y, r.d.z);
                 pk.t_max[k] = t_max[k];
             }
-            let wide = packet::sixteen_wide(lanes);
+            let width = packet::triangle_lanes(lanes);
             self.bvh.occluded_origins(&o, &pk, all, lanes, |i, m| {
-                self.packet_hits(&pk, Some(&o), i, m, wide)
+                self.packet_hits(&pk, Some(&o), i, m, width)
             })
         };
         match &self.instances {

@@ -9,8 +9,9 @@
 //! Every answer is the same bits as [`Scene::intersect`]'s: each lane tests the boxes and the
 //! primitives it reaches by the single ray's operations (`Scene::keep_nearer`, the tie rule
 //! included), and its hit becomes an [`Interaction`] by the same code, instances and masks
-//! included. A triangle is tested against the lanes that reach it four at a time
-//! ([`intersect_lanes`], the single ray's test in lanes), as are the occlusion packets'.
+//! included. A triangle is tested against the lanes that reach it sixteen at once (in one
+//! AVX-512 register or two AVX ones) or four at a time ([`intersect_lanes`], the single
+//! ray's test in lanes), as are the occlusion packets'.
 
 use super::{take_nearer, Interaction, Scene, NO_HIT, SPHERE};
 use crate::accel::{RayPacket, PACKET};
@@ -81,7 +82,7 @@ impl Scene {
         best: &mut [(usize, f32, f32, f32); PACKET],
         keep: impl Fn(usize, usize, f32, f32, f32) -> bool,
     ) -> u32 {
-        let wide = sixteen_wide(lanes);
+        let width = triangle_lanes(lanes);
         self.bvh
             .closest_packet_with(pk, active, lanes, |i, lanes, t_max| {
                 let mut nearer = 0;
@@ -100,14 +101,14 @@ impl Scene {
                         }
                     }
                 } else {
-                    self.triangle_hits(idx, pk, None, lanes, wide, take);
+                    self.triangle_hits(idx, pk, None, lanes, width, take);
                 }
                 nearer
             })
     }
 
     /// The lanes of `lanes` whose rays primitive `i` blocks before their `t_max`: the rays
-    /// of `pk`, or from `origins` in the directions of `pk`; `wide` as for
+    /// of `pk`, or from `origins` in the directions of `pk`; `width` as for
     /// `Scene::triangle_hits`.
     #[inline(always)]
     pub(super) fn packet_hits(
@@ -116,7 +117,7 @@ impl Scene {
         origins: Option<&[[f32; PACKET]; 3]>,
         i: usize,
         lanes: u32,
-        wide: bool,
+        width: TriangleLanes,
     ) -> u32 {
         let ray = |l| ray_of(pk, origins, l);
         let each = |hit: &dyn Fn(usize) -> bool| {
@@ -130,7 +131,7 @@ impl Scene {
         match (idx[0] == SPHERE, origins) {
             (false, _) if !lanes.is_power_of_two() => {
                 let mut hits = 0;
-                self.triangle_hits(idx, pk, origins, lanes, wide, |l, (t, _, _)| {
+                self.triangle_hits(idx, pk, origins, lanes, width, |l, (t, _, _)| {
                     hits |= ((t < pk.t_max[l]) as u32) << l;
                 });
                 hits
@@ -154,8 +155,8 @@ impl Scene {
     }
 
     /// Triangle `idx` (its vertex indices) against the rays of `lanes` (those of `pk`, or
-    /// from `origins` in the directions of `pk`) by [`intersect_lanes`], sixteen at once
-    /// where `wide` ([`sixteen_wide`]), else four at a time, and those it is unsure
+    /// from `origins` in the directions of `pk`) by [`intersect_lanes`], `width` lanes at a
+    /// time ([`triangle_lanes`]), and those it is unsure
     /// of one by one: `each(lane, (t, u, v))` gets the hit of every lane that has one up to
     /// infinity, [`Scene::hit`]'s answer (its order of lanes is not theirs).
     #[inline(always)]
@@ -165,7 +166,7 @@ impl Scene {
         pk: &RayPacket,
         origins: Option<&[[f32; PACKET]; 3]>,
         lanes: u32,
-        wide: bool,
+        width: TriangleLanes,
         mut each: impl FnMut(usize, (f32, f32, f32)),
     ) {
         let p = idx.map(|k| self.vertex_fast(k));
@@ -183,12 +184,15 @@ impl Scene {
             }
         };
         #[cfg(target_arch = "x86_64")]
-        if wide {
-            // SAFETY: `wide` is `sixteen_wide`'s, which `cpu::avx512` made true only where
-            // the CPU has AVX-512F.
-            let r = unsafe { sixteen(tri, pk, origins) };
-            let (clear, unsure) = (u32::from(r.clear) & lanes, u32::from(r.unsure) & lanes);
-            give(0, clear, unsure, [&r.t, &r.u, &r.v]);
+        if width != TriangleLanes::Four {
+            // SAFETY: `triangle_lanes` chose the width for the CPU's features.
+            let r = unsafe {
+                match width {
+                    TriangleLanes::Avx512 => sixteen_avx512(tri, pk, origins),
+                    _ => sixteen_avx(tri, pk, origins),
+                }
+            };
+            give(0, r.clear & lanes, r.unsure & lanes, [&r.t, &r.u, &r.v]);
             return;
         }
         let p = p.map(V3::<Vec4>::broadcast);
@@ -216,16 +220,35 @@ impl Scene {
     }
 }
 
-/// Whether a packet whose box tests take `lanes` lanes tests its triangles sixteen lanes at
-/// once: where the box tests are sixteen wide and the CPU has AVX-512 (`cpu::avx512`, read
-/// once a packet rather than a triangle). Tied to the box tests' width so that the tests,
-/// which choose that width, reach both forms on an AVX-512 host.
-#[inline(always)]
-pub(super) fn sixteen_wide(lanes: usize) -> bool {
+/// How a packet tests its triangles ([`Scene::triangle_hits`]): sixteen lanes at once, in
+/// one AVX-512 register or in two AVX ones, or four at a time.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(super) enum TriangleLanes {
+    Four,
     #[cfg(target_arch = "x86_64")]
-    return lanes == PACKET && crate::cpu::avx512();
-    #[cfg(not(target_arch = "x86_64"))]
-    return false;
+    Avx,
+    #[cfg(target_arch = "x86_64")]
+    Avx512,
+}
+
+/// How a packet whose box tests take `lanes` lanes (1, 8 or 16) tests its triangles, chosen
+/// once a packet: sixteen at once in AVX-512 where the box tests are sixteen wide and the CPU
+/// may run it (`cpu::avx512`), in AVX where they take eight lanes or more and the CPU has
+/// it, else four at a time. Tied to the box tests' width so that the tests, which choose
+/// that width, reach every form on an AVX-512 host.
+#[inline(always)]
+pub(super) fn triangle_lanes(lanes: usize) -> TriangleLanes {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if lanes == PACKET && crate::cpu::avx512() {
+            return TriangleLanes::Avx512;
+        }
+        if lanes >= 8 && std::arch::is_x86_feature_detected!("avx") {
+            return TriangleLanes::Avx;
+        }
+    }
+    let _ = lanes;
+    TriangleLanes::Four
 }
 
 /// Lane `l`'s ray: of `pk`, or from `origins` in `pk`'s direction.
@@ -238,43 +261,71 @@ fn ray_of(pk: &RayPacket, origins: Option<&[[f32; PACKET]; 3]>, l: usize) -> Ray
 }
 
 /// [`intersect_lanes`] of all sixteen lanes of `pk` (or from `origins` in its directions)
-/// against `tri` at once, in one AVX-512 register: distances and barycentrics by lane, the
-/// clear lanes that hit (0 < t < ∞) and the unsure ones, as bits.
+/// against `tri` at once: distances and barycentrics by lane, the clear lanes that hit (0 <
+/// t < ∞) and the unsure ones, as bits.
 #[cfg(target_arch = "x86_64")]
-struct Sixteen {
+struct SixteenHits {
     t: [f32; PACKET],
     u: [f32; PACKET],
     v: [f32; PACKET],
-    clear: u16,
-    unsure: u16,
+    clear: u32,
+    unsure: u32,
 }
 
-/// See [`Sixteen`].
+/// [`SixteenHits`] in one AVX-512 register.
 ///
 /// # Safety
 /// The CPU must have AVX-512F.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-unsafe fn sixteen(tri: Triangle, pk: &RayPacket, origins: Option<&[[f32; PACKET]; 3]>) -> Sixteen {
-    use crate::simd::{avx512::F, Float};
-    // (Written out: a closure would be compiled without this function's features.)
+unsafe fn sixteen_avx512(
+    tri: Triangle,
+    pk: &RayPacket,
+    origins: Option<&[[f32; PACKET]; 3]>,
+) -> SixteenHits {
+    sixteen::<crate::simd::avx512::F>(tri, pk, origins)
+}
+
+/// [`SixteenHits`] in two AVX registers.
+///
+/// # Safety
+/// The CPU must have AVX.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+unsafe fn sixteen_avx(
+    tri: Triangle,
+    pk: &RayPacket,
+    origins: Option<&[[f32; PACKET]; 3]>,
+) -> SixteenHits {
+    sixteen::<crate::simd::avx2::F>(tri, pk, origins)
+}
+
+/// [`SixteenHits`] in the lanes of `T`, inlined into a caller compiled with their features.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn sixteen<T: crate::simd::Sixteen>(
+    tri: Triangle,
+    pk: &RayPacket,
+    origins: Option<&[[f32; PACKET]; 3]>,
+) -> SixteenHits {
+    // (Written out: a closure would be compiled without the caller's features.)
     let p = [
-        V3::<F>::broadcast(tri.p0),
+        V3::<T>::broadcast(tri.p0),
         V3::broadcast(tri.p1),
         V3::broadcast(tri.p2),
     ];
     let o = match origins {
-        Some(o) => V3::new(F::load(&o[0]), F::load(&o[1]), F::load(&o[2])),
+        Some(o) => V3::new(T::load(&o[0]), T::load(&o[1]), T::load(&o[2])),
         None => V3::broadcast(pk.o),
     };
-    let d = V3::new(F::load(&pk.d[0]), F::load(&pk.d[1]), F::load(&pk.d[2]));
+    let d = V3::new(T::load(&pk.d[0]), T::load(&pk.d[1]), T::load(&pk.d[2]));
     let r = intersect_lanes(p, o, d);
-    let ahead = r.t.gt(F::zero()) & r.t.lt(F::splat(f32::INFINITY));
-    Sixteen {
+    let ahead = r.t.gt(T::zero()) & r.t.lt(T::splat(f32::INFINITY));
+    SixteenHits {
         t: r.t.to_array(),
         u: r.u.to_array(),
         v: r.v.to_array(),
-        clear: r.clear & ahead,
-        unsure: r.unsure,
+        clear: T::bits(r.clear & ahead),
+        unsure: T::bits(r.unsure),
     }
 }

@@ -13,7 +13,7 @@
 //! (`scene/packet.rs`, after `cpu::avx512`). The wavefront adds the operations only it needs
 //! (`integrator/wavefront/simd.rs`).
 
-use super::Float;
+use super::{Float, Sixteen};
 use std::arch::x86_64::*;
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
@@ -120,6 +120,38 @@ impl Float for F {
                 s,
                 _mm512_castps_si512(self.abs().0),
             )))
+        }
+    }
+}
+
+impl Sixteen for F {
+    #[inline(always)]
+    fn load(a: &[f32; 16]) -> F {
+        F::load(a)
+    }
+    #[inline(always)]
+    fn to_array(self) -> [f32; 16] {
+        F::to_array(self)
+    }
+    #[inline(always)]
+    fn bits(m: M) -> u32 {
+        m.into()
+    }
+    #[inline(always)]
+    fn iota(first: f32) -> F {
+        let i = unsafe {
+            _mm512_setr_ps(
+                0., 1., 2., 3., 4., 5., 6., 7., 8., 9., 10., 11., 12., 13., 14., 15.,
+            )
+        };
+        F(i) + F::splat(first)
+    }
+    #[inline(always)]
+    fn min_by_key(t: F, key: F) -> (f32, f32) {
+        unsafe {
+            let least = _mm512_reduce_min_ps(t.0);
+            let at = _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(t.0, _mm512_set1_ps(least));
+            (least, _mm512_mask_reduce_min_ps(at, key.0))
         }
     }
 }

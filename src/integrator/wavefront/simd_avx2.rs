@@ -1,12 +1,10 @@
-//! Sixteen f32 lanes in two AVX2 registers (lanes 0–7 in the first, 8–15 in the second),
-//! with the same operations as the AVX-512 backend (`simd.rs`), for CPUs without AVX-512:
-//! each the IEEE operation the scalar code performs on one lane (no FMA, no reciprocal
-//! approximations), so a lane computes the same bits on either backend. A lane mask is a
-//! vector mask (all ones in a set lane), as the comparisons give it and `blendv` takes it;
-//! it becomes the sixteen bits of the other backend's masks only where code reads them
-//! (`LaneMask::bits`). Kept as bits, every comparison had taken two `movemask`s and a pack,
-//! and every select a broadcast, an `and` and a compare a half, all on the dependency
-//! chains of the primitive tests (see docs/performance.md).
+//! Sixteen lanes in two AVX2 registers (lanes 0–7 in the first, 8–15 in the second), with
+//! the same operations as the AVX-512 backend (`simd.rs`), for CPUs without AVX-512: the
+//! f32 lanes and masks of [`crate::simd::avx2`] (shared with the small scenes' brute force)
+//! and what only the wavefront does with them (gathers, compressed stores, table lookups,
+//! the masks as bits where code reads them, `LaneMask::bits`), u32 lanes and sixteen PCG32
+//! streams. Each the IEEE operation the scalar code performs on one lane (no FMA, no
+//! reciprocal approximations), so a lane computes the same bits on either backend.
 //!
 //! As in `simd.rs`, these are `#[inline(always)]` safe functions that run AVX2
 //! instructions, sound only because nothing outside this private module tree calls them:
@@ -15,17 +13,11 @@
 
 use super::super::LaneMask;
 use crate::sampler::Uint;
+use crate::simd::avx2::both;
+pub use crate::simd::avx2::{F, M};
 use crate::simd::Float;
 use std::arch::x86_64::*;
-use std::ops::{Add, BitAnd, BitAndAssign, BitOr, BitOrAssign, BitXor, Div, Mul, Neg, Not, Sub};
-
-/// A mask of lanes: all ones in each lane set, all zeros in the others.
-#[derive(Clone, Copy)]
-pub struct M(pub [__m256; 2]);
-
-/// Sixteen f32 lanes.
-#[derive(Clone, Copy)]
-pub struct F(pub [__m256; 2]);
+use std::ops::{BitAnd, BitOr, BitXor};
 
 /// Sixteen u32 lanes.
 #[derive(Clone, Copy)]
@@ -34,24 +26,6 @@ pub struct U(pub [__m256i; 2]);
 // SAFETY (all the `unsafe` blocks of this module): the intrinsics need AVX2, which every
 // caller has checked for (see the module comment); they touch no memory but the arrays
 // they are given.
-
-/// `[e with h = 0, e with h = 1]`: each half's result, written out rather than through a
-/// closure, which would be compiled without the caller's target features and so call the
-/// intrinsics rather than inline them.
-macro_rules! both {
-    ($h:ident => $e:expr) => {
-        [
-            {
-                let $h = 0usize;
-                $e
-            },
-            {
-                let $h = 1usize;
-                $e
-            },
-        ]
-    };
-}
 
 /// Two halves' comparison results as a mask.
 #[inline(always)]
@@ -84,69 +58,11 @@ impl LaneMask for M {
     }
     #[inline(always)]
     fn any(self) -> bool {
-        unsafe {
-            _mm256_testz_ps(
-                _mm256_or_ps(self.0[0], self.0[1]),
-                _mm256_or_ps(self.0[0], self.0[1]),
-            ) == 0
-        }
-    }
-}
-
-impl BitAnd for M {
-    type Output = M;
-    #[inline(always)]
-    fn bitand(self, o: M) -> M {
-        M(both!(h => unsafe { _mm256_and_ps(self.0[h], o.0[h]) }))
-    }
-}
-impl BitOr for M {
-    type Output = M;
-    #[inline(always)]
-    fn bitor(self, o: M) -> M {
-        M(both!(h => unsafe { _mm256_or_ps(self.0[h], o.0[h]) }))
-    }
-}
-impl Not for M {
-    type Output = M;
-    #[inline(always)]
-    fn not(self) -> M {
-        M(both!(h => unsafe {
-            _mm256_xor_ps(self.0[h], _mm256_castsi256_ps(_mm256_set1_epi32(-1)))
-        }))
-    }
-}
-impl BitAndAssign for M {
-    #[inline(always)]
-    fn bitand_assign(&mut self, o: M) {
-        *self = *self & o;
-    }
-}
-impl BitOrAssign for M {
-    #[inline(always)]
-    fn bitor_assign(&mut self, o: M) {
-        *self = *self | o;
+        F::any(self)
     }
 }
 
 impl F {
-    #[inline(always)]
-    pub fn load(a: &[f32; 16]) -> F {
-        F(both!(h => unsafe { _mm256_loadu_ps(a.as_ptr().add(8 * h)) }))
-    }
-    #[inline(always)]
-    pub fn store(self, a: &mut [f32; 16]) {
-        unsafe {
-            _mm256_storeu_ps(a.as_mut_ptr(), self.0[0]);
-            _mm256_storeu_ps(a.as_mut_ptr().add(8), self.0[1]);
-        }
-    }
-    #[inline(always)]
-    pub fn to_array(self) -> [f32; 16] {
-        let mut a = [0.0; 16];
-        self.store(&mut a);
-        a
-    }
     #[inline(always)]
     pub fn is_nan(self) -> M {
         mask_of(both!(h => unsafe { _mm256_cmp_ps::<_CMP_UNORD_Q>(self.0[h], self.0[h]) }))
@@ -194,118 +110,6 @@ impl F {
         F(both!(h => unsafe {
             // (An index below 64 reads inside the table.)
             _mm256_i32gather_ps::<4>(table.as_ptr(), _mm256_and_si256(idx.0[h], _mm256_set1_epi32(63)))
-        }))
-    }
-}
-
-impl Float for F {
-    type Mask = M;
-    #[inline(always)]
-    fn any(m: M) -> bool {
-        m.any()
-    }
-    #[inline(always)]
-    fn splat(x: f32) -> F {
-        F([unsafe { _mm256_set1_ps(x) }; 2])
-    }
-    #[inline(always)]
-    fn sqrt(self) -> F {
-        F(both!(h => unsafe { _mm256_sqrt_ps(self.0[h]) }))
-    }
-    /// |x|: the sign bit cleared, as `f32::abs` and glam's `abs`.
-    #[inline(always)]
-    fn abs(self) -> F {
-        F(both!(h => unsafe {
-            _mm256_and_ps(self.0[h], _mm256_castsi256_ps(_mm256_set1_epi32(0x7fff_ffff)))
-        }))
-    }
-    /// `f32::max` against a number `o` that is not NaN: `o` where `self` is NaN (x86's
-    /// `maxps` gives its second operand where either is NaN).
-    #[inline(always)]
-    fn max_num(self, o: F) -> F {
-        F(both!(h => unsafe { _mm256_max_ps(self.0[h], o.0[h]) }))
-    }
-    /// `f32::min` against a number `o` that is not NaN: `o` where `self` is NaN.
-    #[inline(always)]
-    fn min_num(self, o: F) -> F {
-        F(both!(h => unsafe { _mm256_min_ps(self.0[h], o.0[h]) }))
-    }
-    /// `x < o`, false for NaN.
-    #[inline(always)]
-    fn lt(self, o: F) -> M {
-        mask_of(both!(h => unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(self.0[h], o.0[h]) }))
-    }
-    /// `x <= o`, false for NaN.
-    #[inline(always)]
-    fn le(self, o: F) -> M {
-        mask_of(both!(h => unsafe { _mm256_cmp_ps::<_CMP_LE_OQ>(self.0[h], o.0[h]) }))
-    }
-    /// `x > o`, false for NaN.
-    #[inline(always)]
-    fn gt(self, o: F) -> M {
-        mask_of(both!(h => unsafe { _mm256_cmp_ps::<_CMP_GT_OQ>(self.0[h], o.0[h]) }))
-    }
-    /// `x >= o`, false for NaN.
-    #[inline(always)]
-    fn ge(self, o: F) -> M {
-        mask_of(both!(h => unsafe { _mm256_cmp_ps::<_CMP_GE_OQ>(self.0[h], o.0[h]) }))
-    }
-    /// `x == o`, false for NaN.
-    #[inline(always)]
-    fn eq(self, o: F) -> M {
-        mask_of(both!(h => unsafe { _mm256_cmp_ps::<_CMP_EQ_OQ>(self.0[h], o.0[h]) }))
-    }
-    /// `a` where `m`, else `b`.
-    #[inline(always)]
-    fn select(m: M, a: F, b: F) -> F {
-        F(both!(h => unsafe { _mm256_blendv_ps(b.0[h], a.0[h], m.0[h]) }))
-    }
-    /// `self.copysign(sign)`: the magnitude of `self` with the sign bit of `sign`.
-    #[inline(always)]
-    fn copysign(self, sign: F) -> F {
-        let m = self.abs();
-        F(both!(h => unsafe {
-            let bit = _mm256_castsi256_ps(_mm256_set1_epi32(i32::MIN));
-            _mm256_or_ps(m.0[h], _mm256_and_ps(sign.0[h], bit))
-        }))
-    }
-}
-
-impl Add for F {
-    type Output = F;
-    #[inline(always)]
-    fn add(self, o: F) -> F {
-        F(both!(h => unsafe { _mm256_add_ps(self.0[h], o.0[h]) }))
-    }
-}
-impl Sub for F {
-    type Output = F;
-    #[inline(always)]
-    fn sub(self, o: F) -> F {
-        F(both!(h => unsafe { _mm256_sub_ps(self.0[h], o.0[h]) }))
-    }
-}
-impl Mul for F {
-    type Output = F;
-    #[inline(always)]
-    fn mul(self, o: F) -> F {
-        F(both!(h => unsafe { _mm256_mul_ps(self.0[h], o.0[h]) }))
-    }
-}
-impl Div for F {
-    type Output = F;
-    #[inline(always)]
-    fn div(self, o: F) -> F {
-        F(both!(h => unsafe { _mm256_div_ps(self.0[h], o.0[h]) }))
-    }
-}
-impl Neg for F {
-    type Output = F;
-    /// The sign bit flipped, as Rust's `-x` and glam's `neg`.
-    #[inline(always)]
-    fn neg(self) -> F {
-        F(both!(h => unsafe {
-            _mm256_xor_ps(self.0[h], _mm256_castsi256_ps(_mm256_set1_epi32(i32::MIN)))
         }))
     }
 }

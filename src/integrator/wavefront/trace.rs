@@ -1,8 +1,8 @@
 //! Sixteen rays against every primitive of a small scene, one primitive at a time: its
 //! data broadcast, the rays in the lanes. The transpose of [`crate::accel::flat`], which
 //! tests one ray against sixteen triangles; the arithmetic of each (ray, primitive) pair is
-//! the same, operation for operation ([`TriangleBlock`]'s, which is
-//! [`Triangle::intersect`]'s, and [`Sphere::intersect`]'s), and so are the rules that
+//! the same, the one lane form of [`Triangle::intersect`] ([`intersect_lanes_edges`]) and
+//! of [`Sphere::intersect`] ([`intersect_lanes`]), and so are the rules that
 //! choose among hits (the spheres first, each bounded by the nearest so far; then the
 //! triangles, bounded by the spheres' nearest; of equally near hits the lowest primitive).
 //! So each ray gets the hit `Scene::intersect` gives it and the answer `Scene::occluded`
@@ -10,19 +10,16 @@
 //! Triangle pairs near an edge are decided by the scene's own test (`Triangle::intersect`
 //! with its f64 fallback), as there.
 //!
-//! [`TriangleBlock`]: crate::geometry::triangle_block::TriangleBlock
 //! [`Triangle::intersect`]: crate::geometry::Triangle::intersect
 //! [`Sphere::intersect`]: crate::geometry::Sphere::intersect
 
-use crate::simd::{Float, Vector3};
+use crate::simd::Float;
 use super::simd::{F, M, U, V3};
 use super::{Ball, LaneMask, Tri};
 use crate::geometry::sphere::intersect_lanes;
+use crate::geometry::triangle::{intersect_lanes_edges, LaneHits};
 use crate::geometry::Ray;
 use crate::scene::Scene;
-
-/// Barycentric margin of the fast path, as in `Triangle::intersect`.
-const EDGE_EPS: f32 = 1e-4;
 
 /// The rays' nearest hits: the lanes hit, those whose hit is a sphere, the primitive hit,
 /// and t, u and v (a sphere's u and v are 0).
@@ -50,24 +47,11 @@ impl Unsure {
     }
 }
 
-/// Per ray, the pair's quantities of Möller–Trumbore: (u, v, t) and the lanes it classes
-/// clear (u, v, w > ε) and out (u or v < −ε, or u + v > 1 + ε).
+/// The rays against `tri`: `Triangle::intersect`'s fast path in lanes.
 #[inline(always)]
-fn test(tri: &Tri, o: &V3, d: &V3) -> (F, F, F, M, M) {
+fn test(tri: &Tri, o: V3, d: V3) -> LaneHits<F> {
     let (p0, e1, e2) = (V3::splat(tri.p0), V3::splat(tri.e1), V3::splat(tri.e2));
-    let s = *o - p0;
-    let p = d.cross(e2);
-    let q = s.cross(e1);
-    let one = F::splat(1.0);
-    let inv_det = one / e1.dot(p);
-    let u = s.dot(p) * inv_det;
-    let v = d.dot(q) * inv_det;
-    let w = (one - u) - v;
-    let t = e2.dot(q) * inv_det;
-    let (eps, neps) = (F::splat(EDGE_EPS), F::splat(-EDGE_EPS));
-    let clear = u.gt(eps) & v.gt(eps) & w.gt(eps);
-    let out = u.lt(neps) | v.lt(neps) | (u + v).gt(F::splat(1.0 + EDGE_EPS));
-    (u, v, t, clear, out)
+    intersect_lanes_edges(p0, e1, e2, o, d)
 }
 
 /// The ray of lane `l`.
@@ -114,7 +98,13 @@ pub unsafe fn closest(
     let mut unsure = Unsure::new();
     let zero = F::zero();
     for (j, tri) in tris.iter().enumerate() {
-        let (u, v, t, clear, out) = test(tri, &o, &d);
+        let LaneHits {
+            t,
+            u,
+            v,
+            clear,
+            unsure: near_edge,
+        } = test(tri, o, d);
         // Strictly nearer only: of equally near hits the first slot stays.
         let hit = clear & t.gt(zero) & t.lt(bt) & active;
         bt = F::select(hit, t, bt);
@@ -122,7 +112,7 @@ pub unsafe fn closest(
         bv = F::select(hit, v, bv);
         bprim = U::select(hit, U::splat(tri.prim), bprim);
         thit |= hit;
-        let uns = !(clear | out) & active;
+        let uns = near_edge & active;
         if uns.any() {
             unsure.list[unsure.n] = (uns.bits(), j as u16);
             unsure.n += 1;
@@ -221,9 +211,9 @@ pub unsafe fn occluded(
     let mut unsure = Unsure::new();
     let zero = F::zero();
     for (j, tri) in tris.iter().enumerate() {
-        let (_, _, t, clear, out) = test(tri, &o, &d);
-        blocked |= clear & t.gt(zero) & t.lt(t_max) & active;
-        let uns = !(clear | out) & active;
+        let r = test(tri, o, d);
+        blocked |= r.clear & r.t.gt(zero) & r.t.lt(t_max) & active;
+        let uns = r.unsure & active;
         if uns.any() {
             unsure.list[unsure.n] = (uns.bits(), j as u16);
             unsure.n += 1;
