@@ -1001,7 +1001,7 @@ fn shadow_packets_match_single_rays() {
             d: [[0.0; PACKET]; 3],
             t_max: [0.0; PACKET],
         };
-        // Some packets aim at points on one triangle's edges (the lanes `Triangle::occludes4`
+        // Some packets aim at points on one triangle's edges (the lanes `intersect_lanes`
         // leaves to the f64 test), beyond the triangle so that it is the blocker.
         let tri = soup.tris[(rng.f() * soup.tris.len() as f32) as usize % soup.tris.len()];
         for lane in 0..PACKET {

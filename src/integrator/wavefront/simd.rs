@@ -9,7 +9,7 @@
 //! that call the intrinsics; inlined into the wavefront's functions compiled for AVX-512
 //! (`lanes_fn!` in `avx512.rs`), they become single instructions. (A closure is compiled
 //! without its caller's features, and where it is not inlined its intrinsics are calls:
-//! `simd_avx2.rs` writes its two halves out for that reason.) They are safe functions that
+//! `crate::simd::avx2` writes its two halves out for that reason.) They are safe functions that
 //! run AVX-512 instructions, which is sound only because nothing outside this private module
 //! tree calls them: every value of these types, and every call of the wavefront's helpers
 //! built on them (`bsdf`, `nee`, `path`), is made inside such a function, which runs only
