@@ -8,6 +8,11 @@
                    constant environment: 849 708 triangles, 11 BSDFs.
   bunny-box.xml    the Cornell box of tests/data/mitsuba/cornell-box.xml with the bunny
                    (3 674 triangles) on its floor.
+  materials-box.xml  the same Cornell box in five kinds of BSDF, each with Mitsuba's
+                   defaults where not given (so the microfacets are Beckmann): the small box
+                   a rough plastic, the large one a rough conductor, a rough dielectric
+                   sphere on the small box, the back wall Mitsuba's principled BSDF, the
+                   rest diffuse. A small scene whose time is the shading, not the traversal.
 
 Everything is computed from closed-form functions (no random numbers), so the files are the
 same bytes on every run. The outputs are large (about 20 MB) and not committed: they go to
@@ -261,20 +266,62 @@ def gallery_xml(bunny_rel, tris):
 
 def bunny_box_xml(bunny_rel):
     """The Cornell box file with the bunny inserted before </scene>, in its white BSDF."""
-    text = open(CORNELL).read()
-    text = text.replace("<!-- Mitsuba 3's own Cornell box",
-                        "<!-- With the Stanford bunny on the floor; Mitsuba 3's own Cornell box", 1)
     bunny = bunny_shape(bunny_rel, -0.42, -1.0, 0.5, 25, 0.045, "white")
-    # The same parameters as the gallery's: $spp and $res.
-    edits = [(r"</scene>\s*$", bunny + "</scene>\n"),
-             (r'(<scene version="[^"]*">)', r'\1\n    <default name="spp" value="64"/>\n'
-              r'    <default name="res" value="256"/>'),
-             (r'name="(width|height)" value="\d+"', r'name="\1" value="$res"'),
-             (r'name="sample_count" value="\d+"', r'name="sample_count" value="$spp"')]
+    return cornell_with(open(CORNELL).read(), [
+        ("<!-- Mitsuba 3's own Cornell box",
+         "<!-- With the Stanford bunny on the floor; Mitsuba 3's own Cornell box"),
+        (r"</scene>\s*$", bunny + "</scene>\n")])
+
+
+def cornell_with(text, edits):
+    """The Cornell box file `text` with the regular-expression `edits` applied (each must
+    match) and the gallery's parameters: $spp and $res."""
+    edits = edits + [
+        (r'(<scene version="[^"]*">)', r'\1\n    <default name="spp" value="64"/>\n'
+         r'    <default name="res" value="256"/>'),
+        (r'name="(width|height)" value="\d+"', r'name="\1" value="$res"'),
+        (r'name="sample_count" value="\d+"', r'name="sample_count" value="$spp"')]
     for pattern, repl in edits:
         text, n = re.subn(pattern, repl, text)
         assert n >= 1, f"cornell-box.xml: no match for {pattern}"
     return text
+
+
+def materials_box_xml():
+    """The Cornell box with its boxes, a sphere and its back wall in other BSDFs."""
+    bsdfs = """    <bsdf type="roughplastic" id="plastic">
+        <rgb name="diffuse_reflectance" value="0.2, 0.35, 0.6"/>
+    </bsdf>
+    <bsdf type="roughconductor" id="metal">
+        <string name="material" value="Au"/>
+        <float name="alpha" value="0.2"/>
+    </bsdf>
+    <bsdf type="principled" id="principled">
+        <rgb name="base_color" value="0.7, 0.65, 0.55"/>
+        <float name="roughness" value="0.4"/>
+        <float name="metallic" value="0.3"/>
+    </bsdf>
+"""
+    sphere = """    <shape type="sphere">
+        <point name="center" x="0.335" y="-0.15" z="0.38"/>
+        <float name="radius" value="0.25"/>
+        <bsdf type="roughdielectric">
+            <float name="alpha" value="0.15"/>
+        </bsdf>
+    </shape>
+"""
+    return cornell_with(open(CORNELL).read(), [
+        ("<!-- Mitsuba 3's own Cornell box",
+         "<!-- In rough plastic, rough conductor, rough dielectric and principled BSDFs; "
+         "Mitsuba 3's own Cornell box"),
+        (r'(\n    <shape type="rectangle" id="light">)', "\n" + bsdfs.rstrip("\n") + r"\1"),
+        (r'(?s)(<shape type="rectangle" id="back">(?:(?!</shape>).)*?)<ref id="white"/>',
+         r'\1<ref id="principled"/>'),
+        (r'(?s)(<shape type="cube" id="small-box">(?:(?!</shape>).)*?)<ref id="white"/>',
+         r'\1<ref id="plastic"/>'),
+        (r'(?s)(<shape type="cube" id="large-box">(?:(?!</shape>).)*?)<ref id="white"/>',
+         r'\1<ref id="metal"/>'),
+        (r"</scene>\s*$", sphere + "</scene>\n")])
 
 
 def main():
@@ -293,7 +340,9 @@ def main():
         f.write(gallery_xml(bunny_rel, tris))
     with open(os.path.join(a.out, "bunny-box.xml"), "w") as f:
         f.write(bunny_box_xml(bunny_rel))
-    print(f"wrote {a.out}/gallery.xml ({tris} triangles) and bunny-box.xml")
+    with open(os.path.join(a.out, "materials-box.xml"), "w") as f:
+        f.write(materials_box_xml())
+    print(f"wrote {a.out}/gallery.xml ({tris} triangles), bunny-box.xml and materials-box.xml")
 
 
 if __name__ == "__main__":

@@ -72,12 +72,14 @@ SCENES = {
     "tncg15": ("tests/data/mitsuba/hexroom/hexroom.xml", "tests/data/refs/hexroom-eye1.exr", 256),
     "bunny-box": (os.path.join(GENERATED, "bunny-box.xml"), None, 256),
     "gallery": (os.path.join(GENERATED, "gallery.xml"), None, 256),
+    "materials-box": (os.path.join(GENERATED, "materials-box.xml"), None, 256),
 }
 TITLES = {
     "cornell": "Cornell box",
     "tncg15": "TNCG15 room",
     "bunny-box": "Cornell box with the bunny",
     "gallery": "gallery (850 k triangles)",
+    "materials-box": "Cornell box in five BSDFs",
 }
 ERR_RES = 256  # the references' resolution
 MITSUBA_SAMPLERS = ("independent", "multijitter", "ldsampler")
