@@ -413,3 +413,68 @@ fn small_scenes_by_brute_force_and_through_the_bvh() {
     assert!(!bvh.is_flat());
     assert_eq!(check(&bvh, &r), hits);
 }
+
+/// Brute force's sixteen rays at a time (`Flat::intersect_rays` and `occluded_rays`, which
+/// `intersect_many` and `occluded_many` take where single rays go by brute force), with each
+/// kernel the CPU runs: two copies of a small grid in two materials (every hit on the grid
+/// as near as the other copy's, which the lower primitive must win) with spheres among
+/// them, some cutting the grid; rays from all around, and rays aimed at the grid's vertices
+/// and edges (whose lanes the fast test leaves to the triangles' own).
+#[cfg(target_arch = "x86_64")]
+#[test]
+fn small_scenes_in_lanes_with_each_kernel() {
+    use mcrt::accel::flat::Kernel;
+    let sphere = |c: [f32; 3], radius: f32| {
+        shape(
+            GeometryDesc::Sphere {
+                center: Vec3::from(c),
+                radius,
+            },
+            0,
+        )
+    };
+    let n = 3;
+    // One copy of the doubled grid: its first copy's triangles.
+    let grid = || {
+        let mut m = twice_gridded(n);
+        m.indices.retain(|t| t[0] < (n + 1) * (n + 1));
+        m
+    };
+    let mut ran = 0;
+    for kernel in [Kernel::Avx512, Kernel::Avx] {
+        if !kernel.available() {
+            eprintln!("{kernel:?}: not on this CPU");
+            continue;
+        }
+        let shapes = vec![
+            shape(GeometryDesc::Mesh(grid()), 0),
+            shape(GeometryDesc::Mesh(grid()), 1),
+            sphere([0.5, 0.5, 0.0], 0.3),
+            sphere([2.0, 1.0, 0.4], 0.5),
+            sphere([1.0, 2.5, -0.2], 0.4),
+        ];
+        let desc = SceneDesc {
+            materials: materials(),
+            textures: vec![Texture::default_checkerboard()],
+            shapes,
+            ..Default::default()
+        };
+        let s = Scene::build_with(desc, SingleRays::Flat(kernel));
+        assert!(s.is_flat(), "{kernel:?}");
+        let mut rng = Rng::new(9);
+        let mut r = rays(&s, &mut rng, N / 2);
+        for k in 0..N / 2 {
+            let (x, y) = ((k as u32 * 7) % (n + 1), (k as u32 * 13 / 5) % (n + 1));
+            let (x, y) = match k % 3 {
+                0 => (x as f32, y as f32),
+                1 => (x as f32 + 0.5, y as f32),
+                _ => (x as f32 + 0.25, y as f32 + 0.25),
+            };
+            let o = Vec3A::new(x, y, 0.0) + rng.dir() * 5.0;
+            r.push(Ray::new(o, Vec3A::new(x, y, 0.0) - o));
+        }
+        mixed(check(&s, &r), N);
+        ran += 1;
+    }
+    assert!(ran > 0 || !std::arch::is_x86_feature_detected!("avx"));
+}

@@ -22,6 +22,7 @@
 //! the example scenes both ways), whichever kernel the CPU runs (AVX-512 or AVX, which give
 //! the same bits), and whether the integrator runs its portable or its x86-64-v3 code.
 
+use crate::geometry::triangle::{intersect_lanes_edges, LaneHits};
 use crate::geometry::triangle_block::{TriangleBlock, LANES};
 use crate::geometry::{Ray, Triangle};
 use crate::simd::{avx2, avx512, Sixteen, Vector3, V3};
@@ -351,6 +352,199 @@ impl Flat {
         any != 0 || self.any_unsure(unsure_all, t_max, &mut hit)
     }
 
+    /// [`Flat::intersect`] of sixteen rays at once, each up to infinity, the same answers:
+    /// the rays in the lanes and each triangle broadcast in turn, the transpose of the blocks'
+    /// test (as the wavefront's brute force), which a batch of rays (`Scene::intersect_many`)
+    /// affords. `hit(k, prim, t_max)` is ray k's own test of a primitive: it decides the
+    /// spheres and the lanes near an edge.
+    #[inline(always)]
+    pub fn intersect_rays<F>(
+        &self,
+        rays: &[Ray; RAYS],
+        hit: F,
+    ) -> [Option<(usize, f32, f32, f32)>; RAYS]
+    where
+        F: FnMut(usize, usize, f32) -> Option<(f32, f32, f32)>,
+    {
+        // SAFETY: the kernel was chosen for the CPU's features (`detect`).
+        unsafe {
+            match self.kernel {
+                Kernel::Avx512 => self.intersect_rays16(rays, hit),
+                Kernel::Avx => self.intersect_rays8(rays, hit),
+            }
+        }
+    }
+
+    /// [`Flat::occluded`] of sixteen rays at once (ray k before `t_max[k]`), as bits (bit k
+    /// for ray k); `hit` as for [`Flat::intersect_rays`].
+    #[inline(always)]
+    pub fn occluded_rays<F>(&self, rays: &[Ray; RAYS], t_max: &[f32; RAYS], hit: F) -> u32
+    where
+        F: FnMut(usize, usize, f32) -> Option<(f32, f32, f32)>,
+    {
+        // SAFETY: as above.
+        unsafe {
+            match self.kernel {
+                Kernel::Avx512 => self.occluded_rays16(rays, t_max, hit),
+                Kernel::Avx => self.occluded_rays8(rays, t_max, hit),
+            }
+        }
+    }
+
+    /// # Safety
+    /// The CPU must have AVX-512F.
+    #[inline(never)]
+    #[target_feature(enable = "avx,avx512f")]
+    unsafe fn intersect_rays16<F>(
+        &self,
+        rays: &[Ray; RAYS],
+        hit: F,
+    ) -> [Option<(usize, f32, f32, f32)>; RAYS]
+    where
+        F: FnMut(usize, usize, f32) -> Option<(f32, f32, f32)>,
+    {
+        self.nearest_of_rays::<avx512::F, F>(rays, hit)
+    }
+
+    /// # Safety
+    /// The CPU must have AVX.
+    #[inline(never)]
+    #[target_feature(enable = "avx")]
+    unsafe fn intersect_rays8<F>(
+        &self,
+        rays: &[Ray; RAYS],
+        hit: F,
+    ) -> [Option<(usize, f32, f32, f32)>; RAYS]
+    where
+        F: FnMut(usize, usize, f32) -> Option<(f32, f32, f32)>,
+    {
+        self.nearest_of_rays::<avx2::F, F>(rays, hit)
+    }
+
+    /// # Safety
+    /// The CPU must have AVX-512F.
+    #[inline(never)]
+    #[target_feature(enable = "avx,avx512f")]
+    unsafe fn occluded_rays16<F>(&self, rays: &[Ray; RAYS], t_max: &[f32; RAYS], hit: F) -> u32
+    where
+        F: FnMut(usize, usize, f32) -> Option<(f32, f32, f32)>,
+    {
+        self.blocked_rays::<avx512::F, F>(rays, t_max, hit)
+    }
+
+    /// # Safety
+    /// The CPU must have AVX.
+    #[inline(never)]
+    #[target_feature(enable = "avx")]
+    unsafe fn occluded_rays8<F>(&self, rays: &[Ray; RAYS], t_max: &[f32; RAYS], hit: F) -> u32
+    where
+        F: FnMut(usize, usize, f32) -> Option<(f32, f32, f32)>,
+    {
+        self.blocked_rays::<avx2::F, F>(rays, t_max, hit)
+    }
+
+    /// [`Flat::intersect_rays`] in the lanes of `T`: per ray the spheres as
+    /// [`Flat::intersect`] tests them, then every triangle against all the rays, each lane
+    /// keeping the nearest (a later slot only where strictly nearer, so of equal ones the
+    /// first, the order `Flat::intersect`'s reduction gives), then each ray's lanes near an
+    /// edge and the spheres' hit as there.
+    #[inline(always)]
+    fn nearest_of_rays<T: Sixteen, F>(
+        &self,
+        rays: &[Ray; RAYS],
+        mut hit: F,
+    ) -> [Option<(usize, f32, f32, f32)>; RAYS]
+    where
+        F: FnMut(usize, usize, f32) -> Option<(f32, f32, f32)>,
+    {
+        let mut sphere = [(usize::MAX, f32::INFINITY, 0.0, 0.0); RAYS];
+        let mut bound = [f32::INFINITY; RAYS];
+        if !self.spheres.is_empty() {
+            for (k, s) in sphere.iter_mut().enumerate() {
+                *s = self.nearest_sphere(f32::INFINITY, &mut |p, t| hit(k, p, t));
+                bound[k] = Self::triangle_bound(s, f32::INFINITY);
+            }
+        }
+        let (o, d) = rays_in_lanes::<T>(rays);
+        let mut bt = T::load(&bound);
+        let (mut bu, mut bv, mut bslot) = (T::zero(), T::zero(), T::zero());
+        let mut unsure = [0u64; RAYS];
+        for j in 0..self.prims.len() {
+            let r = self.triangle_lanes(j, o, d);
+            let h = r.clear & r.t.gt(T::zero()) & r.t.lt(bt);
+            bt = T::select(h, r.t, bt);
+            bu = T::select(h, r.u, bu);
+            bv = T::select(h, r.v, bv);
+            bslot = T::select(h, T::splat(j as f32), bslot);
+            unsure_of(&mut unsure, T::bits(r.unsure), j);
+        }
+        let (bt, bu, bv, bslot) = (
+            bt.to_array(),
+            bu.to_array(),
+            bv.to_array(),
+            bslot.to_array(),
+        );
+        std::array::from_fn(|k| {
+            let mut best = (usize::MAX, bound[k], 0.0, 0.0);
+            if bt[k] < bound[k] {
+                best = (bslot[k] as usize, bt[k], bu[k], bv[k]);
+            }
+            if unsure[k] != 0 {
+                best = self.settle(unsure[k], bound[k], best, &mut |p, t| hit(k, p, t));
+            }
+            self.result(sphere[k], best)
+        })
+    }
+
+    /// [`Flat::occluded_rays`] in the lanes of `T`: a ray is blocked by a sphere, by a
+    /// triangle it clearly hits before its `t_max`, or by a triangle near an edge that its
+    /// own test finds, as in [`Flat::occluded`].
+    #[inline(always)]
+    fn blocked_rays<T: Sixteen, F>(
+        &self,
+        rays: &[Ray; RAYS],
+        t_max: &[f32; RAYS],
+        mut hit: F,
+    ) -> u32
+    where
+        F: FnMut(usize, usize, f32) -> Option<(f32, f32, f32)>,
+    {
+        let mut blocked = 0u32;
+        for (k, &t) in t_max.iter().enumerate() {
+            if self
+                .spheres
+                .iter()
+                .any(|&p| hit(k, p as usize, t).is_some())
+            {
+                blocked |= 1 << k;
+            }
+        }
+        let (o, d) = rays_in_lanes::<T>(rays);
+        let tm = T::load(t_max);
+        let mut unsure = [0u64; RAYS];
+        for j in 0..self.prims.len() {
+            let r = self.triangle_lanes(j, o, d);
+            blocked |= T::bits(r.clear & r.t.gt(T::zero()) & r.t.lt(tm));
+            unsure_of(&mut unsure, T::bits(r.unsure), j);
+        }
+        for (k, &u) in unsure.iter().enumerate() {
+            if u != 0
+                && blocked >> k & 1 == 0
+                && self.any_unsure(u, t_max[k], &mut |p, t| hit(k, p, t))
+            {
+                blocked |= 1 << k;
+            }
+        }
+        blocked
+    }
+
+    /// Triangle `slot` against the rays in the lanes of `T` ([`intersect_lanes_edges`]).
+    #[inline(always)]
+    fn triangle_lanes<T: Sixteen>(&self, slot: usize, o: V3<T>, d: V3<T>) -> LaneHits<T> {
+        let (p0, e1, e2) = self.blocks[slot / LANES].triangle(slot % LANES);
+        intersect_lanes_edges(V3::splat(p0), V3::splat(e1), V3::splat(e2), o, d)
+    }
+
     /// Whether any of the triangles' lanes near an edge (bit `16·block + lane` of
     /// `unsure`), decided by `hit`, blocks the ray before `t_max`.
     #[inline(always)]
@@ -366,6 +560,34 @@ impl Flat {
             }
         }
         false
+    }
+}
+
+/// Rays in one batch of [`Flat::intersect_rays`] and [`Flat::occluded_rays`].
+pub const RAYS: usize = 16;
+
+/// The origins and directions of `rays` in the lanes of `T`.
+#[inline(always)]
+fn rays_in_lanes<T: Sixteen>(rays: &[Ray; RAYS]) -> (V3<T>, V3<T>) {
+    let (mut o, mut d) = ([[0f32; RAYS]; 3], [[0f32; RAYS]; 3]);
+    for (k, ray) in rays.iter().enumerate() {
+        for a in 0..3 {
+            o[a][k] = ray.o[a];
+            d[a][k] = ray.d[a];
+        }
+    }
+    // (Not a closure: a closure is compiled without its caller's target features.)
+    let (o0, o1, o2) = (T::load(&o[0]), T::load(&o[1]), T::load(&o[2]));
+    let (d0, d1, d2) = (T::load(&d[0]), T::load(&d[1]), T::load(&d[2]));
+    (V3::new(o0, o1, o2), V3::new(d0, d1, d2))
+}
+
+/// Slot `slot` added to the unsure slots of each ray of `lanes` (bit k for ray k).
+#[inline(always)]
+fn unsure_of(unsure: &mut [u64; RAYS], mut lanes: u32, slot: usize) {
+    while lanes != 0 {
+        unsure[lanes.trailing_zeros() as usize] |= 1 << slot;
+        lanes &= lanes - 1;
     }
 }
 

@@ -296,6 +296,9 @@ impl Scene {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
     unsafe fn intersect_many_v3(&self, rays: &[Ray], out: &mut [Option<Interaction>]) {
+        if self.intersect_many_flat(rays, out) {
+            return;
+        }
         if self.streams() {
             self.intersect_many_k::<{ stream::STREAM }>(rays, out);
             return;
@@ -319,6 +322,9 @@ impl Scene {
 
     #[inline(always)]
     fn intersect_many_portable(&self, rays: &[Ray], out: &mut [Option<Interaction>]) {
+        if self.intersect_many_flat(rays, out) {
+            return;
+        }
         if self.streams() {
             self.intersect_many_k::<{ stream::STREAM }>(rays, out);
         } else {

@@ -49,14 +49,8 @@ impl Scene {
         debug_assert!(pk.t_max.iter().all(|&t| t == f32::INFINITY));
         let mut best = [NO_HIT; PACKET];
         let found = if self.is_flat() {
-            // Brute force, faster than any tree for single rays, takes them one by one.
-            let mut found = 0;
-            for l in lanes_of(active) {
-                if let Some(hit) = self.closest(&pk.ray(l), f32::INFINITY) {
-                    (best[l], found) = (hit, found | 1 << l);
-                }
-            }
-            found
+            // Brute force, faster than any tree for small scenes.
+            self.flat_lanes(pk, active, &mut best)
         } else if self.masked {
             self.closest_lanes(pk, active, lanes, &mut best, |l, i, u, v, t| {
                 self.seen(&pk.ray(l), i, u, v, t)
@@ -68,6 +62,42 @@ impl Scene {
             let hit = (found >> l & 1 != 0).then_some(best[l]);
             self.interaction_into(&pk.ray(l), hit, &mut out[l]);
         }
+    }
+
+    /// [`Scene::intersect_packet`]'s closest hits by brute force, into `best` by lane; returns
+    /// the lanes with one. All sixteen rays at once where the scene has no masks
+    /// ([`Flat::intersect_rays`]; an inactive lane repeats an active one's ray), else one by
+    /// one.
+    ///
+    /// [`Flat::intersect_rays`]: crate::accel::flat::Flat::intersect_rays
+    #[inline(always)]
+    fn flat_lanes(
+        &self,
+        pk: &RayPacket,
+        active: u32,
+        best: &mut [(usize, f32, f32, f32); PACKET],
+    ) -> u32 {
+        let mut found = 0;
+        #[cfg(target_arch = "x86_64")]
+        if let (Some(f), false, true) = (&self.flat, self.masked, active != 0) {
+            const _: () = assert!(PACKET == crate::accel::flat::RAYS);
+            let first = active.trailing_zeros() as usize;
+            let rays: [Ray; PACKET] =
+                std::array::from_fn(|l| pk.ray(if active >> l & 1 != 0 { l } else { first }));
+            let hits = f.intersect_rays(&rays, |k, i, t| self.hit(&rays[k], i, t));
+            for l in lanes_of(active) {
+                if let Some((i, t, u, v)) = hits[l] {
+                    (best[l], found) = ((i, u, v, t), found | 1 << l);
+                }
+            }
+            return found;
+        }
+        for l in lanes_of(active) {
+            if let Some(hit) = self.closest(&pk.ray(l), f32::INFINITY) {
+                (best[l], found) = (hit, found | 1 << l);
+            }
+        }
+        found
     }
 
     /// `Scene::closest_kept` for the lanes of `active` of `pk` in one traversal: into `best`

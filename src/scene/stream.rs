@@ -56,6 +56,9 @@ impl Scene {
     #[inline(always)]
     pub fn intersect_many_k<const K: usize>(&self, rays: &[Ray], out: &mut [Option<Interaction>]) {
         assert_eq!(rays.len(), out.len(), "one output per ray");
+        if K > 1 && self.intersect_many_flat(rays, out) {
+            return;
+        }
         if K <= 1 || self.is_flat() {
             for (ray, o) in rays.iter().zip(out.iter_mut()) {
                 self.interaction_into(ray, self.closest(ray, f32::INFINITY), o);
@@ -120,6 +123,9 @@ impl Scene {
 
     #[inline(always)]
     fn occluded_many_portable(&self, rays: &[Ray], t_max: &[f32], out: &mut [bool]) {
+        if self.occluded_many_flat(rays, t_max, out) {
+            return;
+        }
         if self.streams() {
             self.occluded_many_k::<STREAM>(rays, t_max, out);
         } else {
@@ -136,6 +142,9 @@ impl Scene {
             rays.len() == t_max.len() && rays.len() == out.len(),
             "one distance and one output per ray"
         );
+        if K > 1 && self.occluded_many_flat(rays, t_max, out) {
+            return;
+        }
         if K <= 1 || self.is_flat() {
             for ((ray, &t), o) in rays.iter().zip(t_max).zip(out.iter_mut()) {
                 *o = self.occluded(ray, t);
@@ -165,6 +174,73 @@ impl Scene {
                 done,
             );
         }
+    }
+
+    /// Where single rays go by brute force ([`crate::accel::flat`]), the closest hits of
+    /// `rays` sixteen at a time, the rays in the lanes ([`Flat::intersect_rays`]; the last
+    /// few one by one), each [`Scene::intersect`]'s, and true; false, with nothing written,
+    /// elsewhere. (A batch affords what a single ray cannot: on the Cornell box the lanes'
+    /// brute force was 1.7× the single rays' in the wavefront.)
+    ///
+    /// [`Flat::intersect_rays`]: crate::accel::flat::Flat::intersect_rays
+    #[inline(always)]
+    pub(super) fn intersect_many_flat(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<Interaction>],
+    ) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if let (Some(f), false) = (&self.flat, self.masked) {
+            use crate::accel::flat::RAYS;
+            assert_eq!(rays.len(), out.len(), "one output per ray");
+            let mut rs = rays.chunks_exact(RAYS);
+            let mut os = out.chunks_exact_mut(RAYS);
+            for (r, o) in (&mut rs).zip(&mut os) {
+                let r: &[Ray; RAYS] = r.try_into().expect("a chunk of RAYS");
+                let hits = f.intersect_rays(r, |k, i, t| self.hit(&r[k], i, t));
+                for (k, (ray, o)) in r.iter().zip(o.iter_mut()).enumerate() {
+                    self.interaction_into(ray, hits[k].map(|(i, t, u, v)| (i, u, v, t)), o);
+                }
+            }
+            for (ray, o) in rs.remainder().iter().zip(os.into_remainder()) {
+                self.interaction_into(ray, self.closest(ray, f32::INFINITY), o);
+            }
+            return true;
+        }
+        let _ = (rays, out);
+        false
+    }
+
+    /// [`Scene::intersect_many_flat`] for occlusion: [`Scene::occluded`] of each ray.
+    #[inline(always)]
+    fn occluded_many_flat(&self, rays: &[Ray], t_max: &[f32], out: &mut [bool]) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if let (Some(f), false) = (&self.flat, self.masked) {
+            use crate::accel::flat::RAYS;
+            assert!(
+                rays.len() == t_max.len() && rays.len() == out.len(),
+                "one distance and one output per ray"
+            );
+            let mut rs = rays.chunks_exact(RAYS);
+            let mut ts = t_max.chunks_exact(RAYS);
+            let mut os = out.chunks_exact_mut(RAYS);
+            for ((r, t), o) in (&mut rs).zip(&mut ts).zip(&mut os) {
+                let r: &[Ray; RAYS] = r.try_into().expect("a chunk of RAYS");
+                let t: &[f32; RAYS] = t.try_into().expect("a chunk of RAYS");
+                let blocked = f.occluded_rays(r, t, |k, i, t| self.hit(&r[k], i, t));
+                for (k, o) in o.iter_mut().enumerate() {
+                    *o = blocked >> k & 1 != 0
+                        || (self.instances.as_ref()).is_some_and(|inst| inst.occluded(&r[k], t[k]));
+                }
+            }
+            let rest = rs.remainder().iter().zip(ts.remainder());
+            for ((ray, &t), o) in rest.zip(os.into_remainder()) {
+                *o = self.occluded(ray, t);
+            }
+            return true;
+        }
+        let _ = (rays, t_max, out);
+        false
     }
 
     /// Prefetches the vertex indices of primitives `first..first + count` (BVH order), what
