@@ -133,6 +133,23 @@ fn twice_gridded(n: u32) -> TriangleMesh {
     }
 }
 
+/// `count` rays at an `n` × `n` grid of unit squares in z = 0 (`twice_gridded`) from all
+/// around it: through its vertices, along its edges' lines and across its diagonals.
+fn grid_rays(rng: &mut Rng, n: u32, count: usize) -> Vec<Ray> {
+    (0..count)
+        .map(|k| {
+            let (x, y) = ((k as u32 * 7) % (n + 1), (k as u32 * 13 / 5) % (n + 1));
+            let (x, y) = match k % 3 {
+                0 => (x as f32, y as f32),
+                1 => (x as f32 + 0.5, y as f32),
+                _ => (x as f32 + 0.25, y as f32 + 0.25),
+            };
+            let o = Vec3A::new(x, y, 0.0) + rng.dir() * 5.0;
+            Ray::new(o, Vec3A::new(x, y, 0.0) - o)
+        })
+        .collect()
+}
+
 /// Rays at the scene from all around its bounds (towards points inside, so most hit), rays
 /// pointing away (which miss), axis-parallel rays (zero and negative-zero direction
 /// components), and a path's rays: from hits, cosine-distributed about the shading normal.
@@ -304,19 +321,7 @@ fn spheres_alone() {
 fn equally_near_hits_keep_the_lowest_primitive() {
     let n = 24;
     let s = scene(vec![shape(GeometryDesc::Mesh(twice_gridded(n)), 0)]);
-    let mut rng = Rng::new(3);
-    // Through the grid's vertices, along its edges' lines and across its diagonals.
-    let mut r = Vec::new();
-    for k in 0..N {
-        let (x, y) = ((k as u32 * 7) % (n + 1), (k as u32 * 13 / 5) % (n + 1));
-        let (x, y) = match k % 3 {
-            0 => (x as f32, y as f32),
-            1 => (x as f32 + 0.5, y as f32),
-            _ => (x as f32 + 0.25, y as f32 + 0.25),
-        };
-        let o = Vec3A::new(x, y, 0.0) + rng.dir() * 5.0;
-        r.push(Ray::new(o, Vec3A::new(x, y, 0.0) - o));
-    }
+    let r = grid_rays(&mut Rng::new(3), n, N);
     let hits = check(&s, &r);
     assert!(hits * 10 >= N * 9, "{hits} of {N} rays hit the grid");
 }
@@ -463,16 +468,7 @@ fn small_scenes_in_lanes_with_each_kernel() {
         assert!(s.is_flat(), "{kernel:?}");
         let mut rng = Rng::new(9);
         let mut r = rays(&s, &mut rng, N / 2);
-        for k in 0..N / 2 {
-            let (x, y) = ((k as u32 * 7) % (n + 1), (k as u32 * 13 / 5) % (n + 1));
-            let (x, y) = match k % 3 {
-                0 => (x as f32, y as f32),
-                1 => (x as f32 + 0.5, y as f32),
-                _ => (x as f32 + 0.25, y as f32 + 0.25),
-            };
-            let o = Vec3A::new(x, y, 0.0) + rng.dir() * 5.0;
-            r.push(Ray::new(o, Vec3A::new(x, y, 0.0) - o));
-        }
+        r.extend(grid_rays(&mut rng, n, N / 2));
         mixed(check(&s, &r), N);
         ran += 1;
     }
