@@ -5,10 +5,11 @@
 //! Every answer is the same bits as [`Scene::intersect`]'s: each ray's traversal repeats the
 //! same step function with the same primitive test (`Scene::keep_nearer`, the tie rule
 //! included), and its hit becomes an [`Interaction`] by the same code. Scenes small enough for
-//! brute force ([`crate::accel::flat`]) trace their rays one by one: their few primitives sit
-//! in the L1 cache, with no miss to hide. With instances, the scene's own primitives are
-//! traversed together and the instances (the top-level tree and the groups' trees) one ray at
-//! a time.
+//! brute force ([`crate::accel::flat`]) have no miss to hide (their few primitives sit in the
+//! L1 cache): a batch's rays go sixteen at a time in the lanes, each triangle against all of
+//! them (`Flat::intersect_rays`), with the single ray's answers. With instances, the
+//! scene's own primitives are traversed together and the instances (the top-level tree and
+//! the groups' trees) one ray at a time.
 
 use super::{Interaction, Scene, NO_HIT};
 use crate::accel::prefetch;
