@@ -121,6 +121,8 @@ pub trait Vector3:
     fn broadcast(v: Vec3A) -> Self;
     /// Each component's |x|.
     fn abs(self) -> Self;
+    /// The cross product, as glam's: x = a.y·b.z − b.y·a.z, and so on.
+    fn cross(self, o: Self) -> Self;
     /// The unit vector: each component divided by the length (glam's SSE `normalize`).
     fn normalize(self) -> Self;
     /// The largest component, as glam's `Vec3::max_element`: x.max(y.max(z)) with
@@ -312,6 +314,10 @@ macro_rules! glam_vector3 {
                 <$t>::abs(self)
             }
             #[inline(always)]
+            fn cross(self, o: $t) -> $t {
+                <$t>::cross(self, o)
+            }
+            #[inline(always)]
             fn normalize(self) -> $t {
                 <$t>::normalize(self)
             }
@@ -406,6 +412,10 @@ impl<T: Float> Vector3 for V3<T> {
     #[inline(always)]
     fn abs(self) -> Self {
         V3::new(self.x.abs(), self.y.abs(), self.z.abs())
+    }
+    #[inline(always)]
+    fn cross(self, o: Self) -> Self {
+        V3::cross(self, o)
     }
     /// glam's SSE `normalize`: each component divided by the length.
     #[inline(always)]

@@ -652,6 +652,65 @@ fn mirrors_and_glass_both_ways() {
     }
 }
 
+/// [`SPECULAR`] with its mirrors rough conductors of GGX microfacets: the one-sided one
+/// gold, anisotropic; the two-sided one of a given index, tinted.
+fn rough_metals() -> String {
+    let text = SPECULAR
+        .replace(
+            "[material.mirror1]\ntype = \"mirror\"\nreflectance = [0.9, 0.8, 0.7]",
+            "[material.mirror1]\ntype = \"roughconductor\"\nmaterial = \"Au\"\nalpha_u = 0.05\nalpha_v = 0.4",
+        )
+        .replace(
+            "[material.mirror2]\ntype = \"mirror\"\nreflectance = [0.6, 0.9, 0.9]",
+            "[material.mirror2]\ntype = \"roughconductor\"\neta = [0.2, 0.9, 1.1]\nk = [3.9, 2.4, 2.2]\nreflectance = [0.9, 0.7, 0.9]\nalpha = 0.25",
+        );
+    assert!(text.contains("alpha_u") && text.contains("alpha = 0.25"));
+    text
+}
+
+/// Rough conductors (GGX; isotropic and anisotropic, one- and two-sided, seen from behind),
+/// by brute force and through the scene's own queries, with hidden emitters and both
+/// roulettes: their light samples, BSDF samples and MIS as one path at a time computes them.
+#[test]
+fn rough_conductors_both_ways() {
+    if !cpu_runs_it() {
+        return;
+    }
+    use mcrt::integrator::RussianRoulette;
+    let smooth = rough_metals() + &smooth_ball([0.0, 1.7, -1.2], 0.3, "mirror2", 6, 10);
+    for (k, (text, brute, hide, rr)) in [
+        (rough_metals(), true, false, None),
+        (rough_metals(), true, true, Some(0.6)),
+        (smooth, false, false, None),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let scene = scene_from(&hiding_emitters(&text, hide));
+        let mut s = settings(
+            &scene,
+            FileSettings {
+                width: Some(39),
+                height: Some(31),
+                spp: Some(4),
+                seed: Some(70 + k as u64),
+                ..Default::default()
+            },
+        );
+        if let Some(q) = rr {
+            s.params.rr = RussianRoulette::Fixed(q);
+        }
+        let w = Wavefront::new(&scene, &s);
+        assert!(w.is_some_and(|w| w.is_brute_force() == brute), "case {k}");
+        let what = format!("rough conductors, brute force {brute}, hide {hide}, {rr:?}");
+        let (film, _) = same_both_ways(scene, &s, &what);
+        assert!(
+            film.sum_f64().iter().flatten().sum::<f64>() > 0.0,
+            "{what}: lit"
+        );
+    }
+}
+
 /// A sphere of radius `r` at `c` as a mesh of `2·rings·segments` triangles with smooth
 /// vertex normals (the sphere's), in `material`.
 fn smooth_ball(c: [f32; 3], r: f32, material: &str, rings: usize, segments: usize) -> String {
@@ -907,6 +966,27 @@ vertices = [[2, 0.1, 0], [2, 0.1, 1], [2, 1, 0]]
             "type = \"quad\"\nemission = [6, 6, 6]\nvertices = [[-0.4, 1.2, -0.4], [-0.4, 1.2, 0.4], [0.4, 1.2, 0.4], [0.4, 1.2, -0.4]]",
             "type = \"sphere\"\nemission = [6, 6, 6]\ncenter = [0, 1.2, 0]\nradius = 0.2",
         ),
+    );
+    // Rough conductors of Beckmann microfacets or textured roughness, and with several
+    // shadow rays a vertex (the batch is Lambertian).
+    declined(
+        "Beckmann microfacets",
+        &rough_metals().replace("alpha = 0.25", "alpha = 0.25\ndistribution = \"beckmann\""),
+    );
+    declined(
+        "textured roughness",
+        &rough_metals().replace(
+            "[material.mirror2]",
+            "[texture.checks]\ntype = \"checkerboard\"\ncolor0 = [0.1, 0.1, 0.1]\ncolor1 = [0.3, 0.3, 0.3]\n[material.mirror2]",
+        ).replace("alpha = 0.25", "alpha = \"checks\""),
+    );
+    let scene = scene_from(&rough_metals());
+    let mut s = settings(&scene, FileSettings::default());
+    assert!(Wavefront::new(&scene, &s).is_some(), "rough conductors");
+    s.params.shadow_rays = 2;
+    assert!(
+        Wavefront::new(&scene, &s).is_none(),
+        "rough conductors, two shadow rays"
     );
     declined(
         "a metal",

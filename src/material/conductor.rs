@@ -4,6 +4,7 @@
 
 use super::mirror::reflect_local;
 use super::BsdfSample;
+use crate::simd::{Float, Vector3};
 use crate::Color;
 use glam::Vec3A;
 
@@ -27,28 +28,43 @@ pub struct Conductor {
 /// R = (R_s + R_p)/2. With η = 0, k = 1 (Mitsuba's "none") R = 1 at every angle.
 #[inline]
 pub fn fresnel_conductor(cos_i: f32, eta: f32, k: f32) -> f32 {
+    fresnel_conductor_lanes(cos_i, eta, k)
+}
+
+/// [`fresnel_conductor`] over any lanes.
+#[inline(always)]
+pub fn fresnel_conductor_lanes<T: Float>(cos_i: T, eta: T, k: T) -> T {
+    let (zero, one, half, two) = (T::zero(), T::splat(1.0), T::splat(0.5), T::splat(2.0));
     let c2 = cos_i * cos_i;
-    let s2 = 1.0 - c2;
+    let s2 = one - c2;
     let s4 = s2 * s2;
     let temp1 = eta * eta - k * k - s2;
-    let a2pb2 = (temp1 * temp1 + 4.0 * k * k * eta * eta).max(0.0).sqrt();
-    let a = (0.5 * (a2pb2 + temp1)).max(0.0).sqrt();
+    let a2pb2 = (temp1 * temp1 + T::splat(4.0) * k * k * eta * eta)
+        .max_num(zero)
+        .sqrt();
+    let a = (half * (a2pb2 + temp1)).max_num(zero).sqrt();
     let term1 = a2pb2 + c2;
-    let term2 = 2.0 * cos_i * a;
+    let term2 = two * cos_i * a;
     let rs = (term1 - term2) / (term1 + term2);
     let term3 = a2pb2 * c2 + s4;
     let term4 = term2 * s2;
     let rp = rs * (term3 - term4) / (term3 + term4);
-    0.5 * (rs + rp)
+    half * (rs + rp)
 }
 
 /// `fresnel_conductor` per colour channel.
 #[inline]
 pub fn fresnel_conductor_rgb(cos_i: f32, eta: Color, k: Color) -> Color {
-    Color::new(
-        fresnel_conductor(cos_i, eta.x, k.x),
-        fresnel_conductor(cos_i, eta.y, k.y),
-        fresnel_conductor(cos_i, eta.z, k.z),
+    fresnel_conductor_rgb_lanes(cos_i, eta, k)
+}
+
+/// [`fresnel_conductor_rgb`] over any lanes.
+#[inline(always)]
+pub fn fresnel_conductor_rgb_lanes<C: Vector3>(cos_i: C::F, eta: C, k: C) -> C {
+    C::new(
+        fresnel_conductor_lanes(cos_i, eta.x(), k.x()),
+        fresnel_conductor_lanes(cos_i, eta.y(), k.y()),
+        fresnel_conductor_lanes(cos_i, eta.z(), k.z()),
     )
 }
 

@@ -29,7 +29,8 @@
 //!   Beckmann Distribution" (2014), a Newton inversion of the slope CDF in the erf domain
 //!   that is continuous in the sample, as Mitsuba's `sample_visible_11`.
 
-use super::sampling::square_to_disk_concentric;
+use super::sampling::disk_concentric;
+use crate::simd::{Float, Vector3};
 use glam::{Vec2, Vec3A};
 use std::f32::consts::PI;
 
@@ -110,40 +111,29 @@ impl Microfacet {
     #[inline]
     pub fn d(&self, m: Vec3A) -> f32 {
         let (au, av) = (self.alpha_u, self.alpha_v);
-        let xy = (m.x / au) * (m.x / au) + (m.y / av) * (m.y / av);
-        let d = match self.kind {
+        match self.kind {
             MicrofacetType::Beckmann => {
+                let xy = (m.x / au) * (m.x / au) + (m.y / av) * (m.y / av);
                 let c2 = m.z * m.z;
-                (-xy / c2).exp() / (PI * au * av * c2 * c2)
+                flush((-xy / c2).exp() / (PI * au * av * c2 * c2), m.z)
             }
-            MicrofacetType::Ggx => {
-                let t = xy + m.z * m.z;
-                1.0 / (PI * au * av * t * t)
-            }
-        };
-        // NaN (m in the plane) fails the comparison too.
-        if d * m.z > 1e-20 {
-            d
-        } else {
-            0.0
+            MicrofacetType::Ggx => self.as_ggx().d(m),
         }
     }
 
-    /// (α tan θ)² of v, α projected on v's azimuth; zero at normal incidence.
-    #[inline]
-    fn tan_alpha2(&self, v: Vec3A) -> f32 {
-        let xy = (self.alpha_u * v.x).powi(2) + (self.alpha_v * v.y).powi(2);
-        if xy == 0.0 {
-            0.0
-        } else {
-            xy / (v.z * v.z)
+    /// This distribution as GGX of one lane.
+    #[inline(always)]
+    fn as_ggx(&self) -> Ggx<f32> {
+        Ggx {
+            alpha_u: self.alpha_u,
+            alpha_v: self.alpha_v,
         }
     }
 
     /// Smith's Λ(v), exact (for Beckmann, `g1` uses Walter's approximation of 1/(1 + Λ)).
     #[inline]
     pub fn lambda(&self, v: Vec3A) -> f32 {
-        let t2 = self.tan_alpha2(v);
+        let t2 = tan_alpha2(self.alpha_u, self.alpha_v, v);
         if t2 == 0.0 {
             return 0.0;
         }
@@ -162,23 +152,21 @@ impl Microfacet {
     /// about the side of m (Mitsuba's `smith_g1`).
     #[inline]
     pub fn g1(&self, v: Vec3A, m: Vec3A) -> f32 {
+        if self.kind == MicrofacetType::Ggx {
+            return self.as_ggx().g1(v, m);
+        }
         if v.dot(m) * v.z <= 0.0 {
             return 0.0;
         }
-        let t2 = self.tan_alpha2(v);
+        let t2 = tan_alpha2(self.alpha_u, self.alpha_v, v);
         if t2 == 0.0 {
             return 1.0;
         }
-        match self.kind {
-            MicrofacetType::Beckmann => {
-                let a = (1.0 / t2).sqrt();
-                if a >= 1.6 {
-                    1.0
-                } else {
-                    (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a)
-                }
-            }
-            MicrofacetType::Ggx => 2.0 / (1.0 + (1.0 + t2).sqrt()),
+        let a = (1.0 / t2).sqrt();
+        if a >= 1.6 {
+            1.0
+        } else {
+            (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a)
         }
     }
 
@@ -193,36 +181,9 @@ impl Microfacet {
     #[inline]
     pub fn sample_visible(&self, wo: Vec3A, u: Vec2) -> Vec3A {
         match self.kind {
-            MicrofacetType::Ggx => self.sample_visible_ggx(wo, u),
+            MicrofacetType::Ggx => self.as_ggx().sample_visible(wo, u.x, u.y),
             MicrofacetType::Beckmann => self.sample_visible_beckmann(wo, u),
         }
-    }
-
-    /// Heitz 2018, listing 1, with the disk point's first coordinate along −T1 and T1 = y at
-    /// normal incidence: the orientation of Mitsuba's slope-space form (`sample_visible_11`,
-    /// whose azimuth frame is that of `Frame3f::sincos_phi`), so that the same random numbers
-    /// give Mitsuba's normal.
-    #[inline]
-    fn sample_visible_ggx(&self, wo: Vec3A, u: Vec2) -> Vec3A {
-        // Stretch wo to the configuration with α = 1 (the hemisphere).
-        let vh = Vec3A::new(self.alpha_u * wo.x, self.alpha_v * wo.y, wo.z).normalize();
-        // An orthonormal basis around vh (T1 is perpendicular to the plane of incidence).
-        let len2 = vh.x * vh.x + vh.y * vh.y;
-        let t1 = if len2 > 4.0 * f32::EPSILON / 2.0 {
-            Vec3A::new(-vh.y, vh.x, 0.0) / len2.sqrt()
-        } else {
-            Vec3A::Y
-        };
-        let t2 = vh.cross(t1);
-        // A point on the disk, squeezed onto the part of the projected hemisphere visible
-        // from vh.
-        let p = square_to_disk_concentric(u);
-        let s = 0.5 * (1.0 + vh.z);
-        let p1 = p.x;
-        let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * p.y;
-        // Reproject onto the hemisphere, then unstretch.
-        let nh = t2 * p2 - t1 * p1 + vh * (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
-        Vec3A::new(self.alpha_u * nh.x, self.alpha_v * nh.y, nh.z.max(0.0)).normalize()
     }
 
     /// Heitz and d'Eon 2014 (stretch, sample slopes for α = 1, rotate, unstretch) with
@@ -253,6 +214,118 @@ impl Microfacet {
         }
         self.d(m) * self.g1(wo, m) * wo.dot(m).abs() / wo.z
     }
+}
+
+/// A microfacet distribution over any lanes: what the rough BSDFs' maths is written over,
+/// once for one path ([`Microfacet`], either kind) and for lanes of paths ([`Ggx`]).
+pub trait Distribution<V: Vector3> {
+    /// D(m), flushed to zero as [`Microfacet::d`].
+    fn d(&self, m: V) -> V::F;
+    /// Smith's G1(v, m), as [`Microfacet::g1`].
+    fn g1(&self, v: V, m: V) -> V::F;
+    /// A normal visible from `wo` (`wo.z > 0`) for the numbers (`ux`, `uy`).
+    fn sample_visible(&self, wo: V, ux: V::F, uy: V::F) -> V;
+    /// D_wo(m), as [`Microfacet::pdf_visible`].
+    #[inline(always)]
+    fn pdf_visible(&self, wo: V, m: V) -> V::F {
+        let zero = V::F::zero();
+        let p = self.d(m) * self.g1(wo, m) * wo.dot(m).abs() / wo.z();
+        V::F::select(wo.z().le(zero), zero, p)
+    }
+}
+
+impl Distribution<Vec3A> for Microfacet {
+    #[inline(always)]
+    fn d(&self, m: Vec3A) -> f32 {
+        Microfacet::d(self, m)
+    }
+    #[inline(always)]
+    fn g1(&self, v: Vec3A, m: Vec3A) -> f32 {
+        Microfacet::g1(self, v, m)
+    }
+    #[inline(always)]
+    fn sample_visible(&self, wo: Vec3A, ux: f32, uy: f32) -> Vec3A {
+        Microfacet::sample_visible(self, wo, Vec2::new(ux, uy))
+    }
+    #[inline(always)]
+    fn pdf_visible(&self, wo: Vec3A, m: Vec3A) -> f32 {
+        Microfacet::pdf_visible(self, wo, m)
+    }
+}
+
+/// GGX of roughness (`alpha_u`, `alpha_v`) in each lane, clamped as [`Microfacet::new`]
+/// clamps it: [`Microfacet`]'s GGX, whose methods call these.
+#[derive(Clone, Copy, Debug)]
+pub struct Ggx<F> {
+    pub alpha_u: F,
+    pub alpha_v: F,
+}
+
+impl<V: Vector3> Distribution<V> for Ggx<V::F> {
+    #[inline(always)]
+    fn d(&self, m: V) -> V::F {
+        let (au, av) = (self.alpha_u, self.alpha_v);
+        let (x, y) = (m.x() / au, m.y() / av);
+        let t = (x * x + y * y) + m.z() * m.z();
+        let one = V::F::splat(1.0);
+        flush(one / (V::F::splat(PI) * au * av * t * t), m.z())
+    }
+
+    #[inline(always)]
+    fn g1(&self, v: V, m: V) -> V::F {
+        let (zero, one) = (V::F::zero(), V::F::splat(1.0));
+        let t2 = tan_alpha2(self.alpha_u, self.alpha_v, v);
+        let g = V::F::splat(2.0) / (one + (one + t2).sqrt());
+        // Zero where v and the macro-normal disagree about the side of m.
+        let g = V::F::select(t2.eq(zero), one, g);
+        V::F::select((v.dot(m) * v.z()).le(zero), zero, g)
+    }
+
+    /// Heitz 2018, listing 1, with the disk point's first coordinate along −T1 and T1 = y at
+    /// normal incidence: the orientation of Mitsuba's slope-space form (`sample_visible_11`,
+    /// whose azimuth frame is that of `Frame3f::sincos_phi`), so that the same random numbers
+    /// give Mitsuba's normal.
+    #[inline(always)]
+    fn sample_visible(&self, wo: V, ux: V::F, uy: V::F) -> V {
+        let (au, av) = (self.alpha_u, self.alpha_v);
+        let (zero, one, k) = (V::F::zero(), V::F::splat(1.0), V::F::splat);
+        // Stretch wo to the configuration with α = 1 (the hemisphere).
+        let vh = V::new(au * wo.x(), av * wo.y(), wo.z()).normalize();
+        // An orthonormal basis around vh (T1 is perpendicular to the plane of incidence).
+        let len2 = vh.x() * vh.x() + vh.y() * vh.y();
+        let t1 = V::select(
+            len2.gt(k(4.0 * f32::EPSILON / 2.0)),
+            V::new(-vh.y(), vh.x(), zero).div(len2.sqrt()),
+            V::new(zero, one, zero),
+        );
+        let t2 = vh.cross(t1);
+        // A point on the disk, squeezed onto the part of the projected hemisphere visible
+        // from vh.
+        let (px, py) = disk_concentric(ux, uy);
+        let s = k(0.5) * (one + vh.z());
+        let p1 = px;
+        let p2 = (one - s) * (one - p1 * p1).max_num(zero).sqrt() + s * py;
+        // Reproject onto the hemisphere, then unstretch.
+        let up = (one - p1 * p1 - p2 * p2).max_num(zero).sqrt();
+        let nh = t2.scale(p2) - t1.scale(p1) + vh.scale(up);
+        V::new(au * nh.x(), av * nh.y(), nh.z().max_num(zero)).normalize()
+    }
+}
+
+/// D where D·cos θm > 1e-20, else zero (Mitsuba's flush; NaN, m in the plane, fails the
+/// comparison too).
+#[inline(always)]
+fn flush<T: Float>(d: T, cos_m: T) -> T {
+    T::select((d * cos_m).gt(T::splat(1e-20)), d, T::zero())
+}
+
+/// (α tan θ)² of v, α projected on v's azimuth; zero at normal incidence.
+#[inline(always)]
+fn tan_alpha2<V: Vector3>(alpha_u: V::F, alpha_v: V::F, v: V) -> V::F {
+    let (x, y) = (alpha_u * v.x(), alpha_v * v.y());
+    let xy = x * x + y * y;
+    let zero = V::F::zero();
+    V::F::select(xy.eq(zero), zero, xy / (v.z() * v.z()))
 }
 
 /// The slopes of a Beckmann surface of α = 1 visible from a direction at cos θ = `cos_theta`
@@ -355,7 +428,13 @@ fn erfinv(x: f32) -> f32 {
 /// Reflects `wo` about the microfacet normal `m`.
 #[inline]
 pub fn reflect_about(wo: Vec3A, m: Vec3A) -> Vec3A {
-    2.0 * wo.dot(m) * m - wo
+    reflect_about_lanes(wo, m)
+}
+
+/// [`reflect_about`] over any lanes.
+#[inline(always)]
+pub fn reflect_about_lanes<V: Vector3>(wo: V, m: V) -> V {
+    m.scale(V::F::splat(2.0) * wo.dot(m)) - wo
 }
 
 #[cfg(test)]

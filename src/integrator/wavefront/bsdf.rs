@@ -1,8 +1,10 @@
 //! BSDF sampling, lane by lane: `Material::orient` and `Material::sample` for the
-//! Lambertian, mirror and glass BSDFs, over the warps and Fresnel terms of
-//! [`crate::material`] instanced for the lanes.
+//! Lambertian, mirror, glass and rough conductor BSDFs, over the warps, Fresnel terms and
+//! BSDFs of [`crate::material`] instanced for the lanes.
 
 use super::simd::{F, M, V3};
+use crate::material::microfacet::Ggx;
+use crate::material::rough_conductor::RoughConductor;
 use crate::material::{dielectric, lambert};
 use crate::simd::{Float, Vector3};
 
@@ -18,9 +20,10 @@ pub struct Sample {
     pub eta: F,
 }
 
-/// The BSDF samples of lanes with Lambertian (`lambert`), mirror (`mirror`) and glass
-/// (`glass`) materials: `colour` the albedo or reflectance, `eta` the glass's index,
-/// `oriented` and `side` what `Material::orient` gives (glass: every lane, side 1).
+/// The BSDF samples of lanes with Lambertian (`lambert`), mirror (`mirror`), glass
+/// (`glass`) and rough conductor (`rough`, the BSDFs beside it where any lane has one) materials: `colour` the
+/// albedo or reflectance, `eta` the glass's index, `oriented` and `side` what
+/// `Material::orient` gives (glass: every lane, side 1).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub fn sample(
@@ -29,6 +32,7 @@ pub fn sample(
     colour: V3,
     eta: F,
     (lambert, mirror, glass): (M, M, M),
+    (rough, conductor): (M, Option<&RoughConductor<Ggx<F>, V3>>),
     oriented: M,
     side: F,
 ) -> Sample {
@@ -70,11 +74,31 @@ pub fn sample(
             },
         ),
     );
-    Sample {
+    let mut s = Sample {
         ok: lambert_ok | (mirror & oriented) | glass_ok,
         wi,
         weight,
         pdf,
         eta: F::select(glass & !reflects, etap, one),
+    };
+    // Rough conductors on the side wo is on, and back (`Material::sample`'s flip).
+    if let Some(conductor) = conductor {
+        let (r_wi, r_weight, r_pdf, r_ok) = conductor.sample_lanes(flip_z(wo, side), ux, uy);
+        s.ok |= rough & oriented & r_ok;
+        s.wi = V3::select(rough, flip_z(r_wi, side), s.wi);
+        s.weight = V3::select(rough, r_weight, s.weight);
+        s.pdf = F::select(rough, r_pdf, s.pdf);
+    }
+    s
+}
+
+/// `w` with its z times `side`: `Material`'s flip of a direction to the side the path is on
+/// (x and y times one).
+#[inline(always)]
+pub fn flip_z(w: V3, side: F) -> V3 {
+    V3 {
+        x: w.x,
+        y: w.y,
+        z: w.z * side,
     }
 }

@@ -29,8 +29,8 @@
 //! Each lane computes exactly what `path::li` computes for its camera sample: the same
 //! numbers from the same sampler ([`rng`]), the same hits, and the same shading maths, which
 //! is written once over the lane traits of [`crate::simd`] (frames, warps, Fresnel,
-//! refraction, MIS, ray offsets, hit points, light samples, Lambert and glass sampling) and
-//! instanced here with sixteen lanes, there with one. A sample's value is therefore the same
+//! refraction, MIS, ray offsets, hit points, light samples, the Lambertian, glass and rough
+//! conductor BSDFs) and instanced here with sixteen lanes, there with one. A sample's value is therefore the same
 //! bits whichever of the two renders it, and so is the image (the film's fixed-point sums do
 //! not depend on the order samples arrive in): on any CPU, any thread count, any split into
 //! passes or machines. `tests/wavefront.rs` compares the two on scenes that take every
@@ -38,11 +38,12 @@
 //! masks, the roulette).
 //!
 //! The scenes it takes ([`Wavefront::new`]): every material Lambertian (one- or two-sided),
-//! a mirror, smooth glass or black, their colours constant or textured (looked up at each
-//! hit as `Scene::material_at` does, so not with brute force), none with a normal or bump
-//! map; one light, a triangle or a parallelogram of constant radiance; a pinhole or
-//! perspective camera; the `path` integrator, any number of shadow rays (one only with
-//! AVX2), either sampler. The Cornell box, the TNCG15 room and the Cornell box with the
+//! a mirror, smooth glass, a rough conductor of GGX microfacets (isotropic or not) or black,
+//! their colours constant or textured (looked up at each hit as `Scene::material_at` does,
+//! so not with brute force; a rough conductor's not), none with a normal or bump map; one
+//! light, a triangle or a parallelogram of constant radiance; a pinhole or perspective
+//! camera; the `path` integrator, any number of shadow rays (one only with AVX2 or with
+//! rough conductors), either sampler. The Cornell box, the TNCG15 room and the Cornell box with the
 //! Stanford bunny are such scenes. Any other scene, and any CPU without AVX2, BMI1, BMI2 and
 //! POPCNT, renders with the stream ([`super::stream`]) or `path::li`.
 //!
@@ -58,7 +59,7 @@ mod avx512;
 use crate::camera::Camera;
 use crate::film::PixelSums;
 use crate::integrator::{IntegratorKind, RussianRoulette};
-use crate::material::Bsdf;
+use crate::material::{Bsdf, MicrofacetType};
 use crate::render::{self, RenderSettings, RenderStats, TilePixel};
 use crate::sampler::SamplerKind;
 use crate::scene::{Scene, META_EMITTER, META_MATERIAL, SPHERE};
@@ -106,15 +107,17 @@ impl LaneMask for Bits {
 /// Most primitives the wavefront traces (by brute force, as `accel::flat` does).
 pub const MAX_PRIMS: usize = 64;
 
-/// `flags` of a primitive: its material's kind in the low two bits...
-const KIND: u32 = 3;
+/// `flags` of a primitive: its material's kind in the low three bits...
+const KIND: u32 = 7;
 const LAMBERT: u32 = 0;
 const MIRROR: u32 = 1;
 const GLASS: u32 = 2;
 const BLACK: u32 = 3;
+/// A rough conductor of GGX microfacets.
+const ROUGH: u32 = 4;
 /// ...whether it is two-sided, and whether it emits.
-const TWO_SIDED: u32 = 4;
-const EMITTER: u32 = 8;
+const TWO_SIDED: u32 = 8;
+const EMITTER: u32 = 16;
 
 /// A scene prepared for sixteen paths at a time: how its rays are traced, and what shading
 /// reads, per primitive in tables of 64 for lane lookups (brute force) or per material.
@@ -134,11 +137,13 @@ pub struct Wavefront<'a> {
     p2: [[f32; 64]; 3],
     ng: [[f32; 64]; 3],
     radius: [f32; 64],
-    /// The material's colour (Lambertian albedo, mirror reflectance) and relative index of
-    /// refraction (glass).
+    /// The material's colour (Lambertian albedo, mirror and rough conductor reflectance)
+    /// and relative index of refraction (glass).
     colour: [[f32; 64]; 3],
     eta: [f32; 64],
     flags: [u32; 64],
+    /// A rough conductor's roughness and complex index of refraction.
+    rough: RoughTables,
     light: Light,
     max_depth: u32,
     rr: RussianRoulette,
@@ -201,36 +206,82 @@ enum Trace {
 }
 
 /// What the lanes read of a material: the flags of a primitive (`KIND`, `TWO_SIDED`), the
-/// colour (Lambertian albedo, mirror reflectance) and relative index of refraction (glass);
-/// whether the colour is a texture's, to be looked up at each hit ([`Trace::Scene`] only),
-/// and whether the material is an opacity mask (which the scene's queries see through).
+/// colour (Lambertian albedo, mirror and rough conductor reflectance), relative index of
+/// refraction (glass) and a rough conductor's parameters; whether the colour is a
+/// texture's, to be looked up at each hit ([`Trace::Scene`] only), and whether the material
+/// is an opacity mask (which the scene's queries see through).
 #[derive(Clone, Copy, Debug)]
 struct Shading {
     flags: u32,
     colour: [f32; 3],
     eta: f32,
+    rough: Rough,
     textured: bool,
     masked: bool,
 }
 
+/// A rough conductor's GGX roughness (as `Microfacet::new` clamps it) and complex index of
+/// refraction η + ik; other materials' are never read (those of a smooth surface).
+#[derive(Clone, Copy, Debug)]
+struct Rough {
+    alpha: [f32; 2],
+    eta: [f32; 3],
+    k: [f32; 3],
+}
+
+impl Rough {
+    const NONE: Rough = Rough {
+        alpha: [1.0; 2],
+        eta: [0.0; 3],
+        k: [1.0; 3],
+    };
+}
+
+/// [`Rough`] by primitive, for [`Trace::Lanes`]' lookups.
+struct RoughTables {
+    alpha: [[f32; 64]; 2],
+    eta: [[f32; 64]; 3],
+    k: [[f32; 64]; 3],
+}
+
+impl RoughTables {
+    fn set(&mut self, j: usize, r: &Rough) {
+        for c in 0..3 {
+            (self.eta[c][j], self.k[c][j]) = (r.eta[c], r.k[c]);
+        }
+        (self.alpha[0][j], self.alpha[1][j]) = (r.alpha[0], r.alpha[1]);
+    }
+}
+
 impl Shading {
     /// The material as the lanes shade it, if they do: a Lambertian, a mirror, smooth glass
-    /// of unit factors, or black; colours constant or textured; no normal or bump map.
+    /// of unit factors, a GGX rough conductor, or black; colours constant or textured (not a
+    /// rough conductor's); no normal or bump map.
     fn of(material: &crate::material::Material) -> Option<Shading> {
         if material.perturbs() || material.mix.is_some() {
             return None;
         }
         let textured = !material.slots.is_empty();
         let (kind, colour, eta) = Self::bsdf(&material.bsdf)?;
-        // (Glass's textured factors would not be the unit ones the lanes assume.)
-        if textured && kind == GLASS {
+        // (Glass's textured factors would not be the unit ones the lanes assume, and a
+        // rough conductor's textured roughness is not looked up.)
+        if textured && (kind == GLASS || kind == ROUGH) {
             return None;
         }
+        let rough = match &material.bsdf {
+            Bsdf::RoughConductor(b) => Rough {
+                alpha: [b.distr.alpha_u, b.distr.alpha_v],
+                eta: b.eta.into(),
+                k: b.k.into(),
+            },
+            _ => Rough::NONE,
+        };
         let two_sided = if material.two_sided { TWO_SIDED } else { 0 };
         Some(Shading {
             flags: kind | two_sided,
             colour,
             eta,
+            rough,
             textured,
             masked: material.opacity.is_some(),
         })
@@ -242,6 +293,9 @@ impl Shading {
         let (kind, colour, eta) = match bsdf {
             Bsdf::Lambert(b) => (LAMBERT, b.albedo, 1.0),
             Bsdf::Mirror(b) => (MIRROR, b.reflectance, 1.0),
+            Bsdf::RoughConductor(b) if b.distr.kind == MicrofacetType::Ggx => {
+                (ROUGH, b.specular_reflectance, 1.0)
+            }
             Bsdf::Dielectric(b) => {
                 // (Glass with factors other than 1 takes the scalar path.)
                 if b.specular_reflectance != crate::Color::ONE
@@ -341,6 +395,11 @@ impl<'a> Wavefront<'a> {
             .iter()
             .map(Shading::of)
             .collect::<Option<Vec<_>>>()?;
+        // (Several light samples a vertex, the planar batch's, are Lambertian only.)
+        let has_rough = materials.iter().any(|m| m.flags & KIND == ROUGH);
+        if has_rough && p.shadow_rays > 1 {
+            return None;
+        }
         let mut w = Wavefront {
             scene,
             trace: Trace::Scene,
@@ -355,6 +414,11 @@ impl<'a> Wavefront<'a> {
             colour: [[0.0; 64]; 3],
             eta: [1.0; 64],
             flags: [0; 64],
+            rough: RoughTables {
+                alpha: [[1.0; 64]; 2],
+                eta: [[0.0; 64]; 3],
+                k: [[1.0; 64]; 3],
+            },
             light: Light {
                 a: planar.a.into(),
                 b: planar.b.into(),
@@ -417,6 +481,7 @@ impl<'a> Wavefront<'a> {
                 self.colour[c][j] = m.colour[c];
             }
             self.eta[j] = m.eta;
+            self.rough.set(j, &m.rough);
             if idx[0] == SPHERE {
                 // (Emitting spheres are lights of their own: no scene here has one.)
                 if meta & META_EMITTER != 0 || scene.sphere_frames[idx[1] as usize].flip {

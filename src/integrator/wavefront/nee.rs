@@ -4,6 +4,7 @@
 //! (`nee::planar::planar::<true>`, Lambertian vertices), the samples computed sixteen lanes
 //! at a time and each lane's shadow rays traced as its own packets.
 
+use super::bsdf::flip_z;
 use super::simd::{F, M, V3};
 use super::{Bits, LaneMask, Wavefront};
 use crate::accel::{RayPacket, PACKET};
@@ -13,27 +14,32 @@ use crate::integrator::nee::{lambert_weight, shadow_dir, wrap};
 use crate::integrator::RayStats;
 use crate::light::{planar_point, towards};
 use crate::material::lambert;
+use crate::material::microfacet::Ggx;
+use crate::material::rough_conductor::RoughConductor;
 use crate::material::sampling::cosine_hemisphere_pdf_lanes;
 use crate::material::sampling::power_heuristic_lanes;
 use crate::simd::{Float, Vector3};
 use glam::Vec3A;
 use std::f32::consts::{FRAC_1_PI, PI};
 
-/// A vertex of each lane: the point, its error bound and geometric normal, the frame, its
-/// material's colour and the side of the surface the path is on (`Material::orient`:
-/// `oriented` lanes, `side` ±1).
-pub struct Vertex {
+/// A vertex of each lane: the point, its error bound and geometric normal, the frame, the
+/// direction to the last vertex (local), its material's colour, the lanes whose material is
+/// a rough conductor and its BSDF, and the side of the surface the path is on
+/// (`Material::orient`: `oriented` lanes, `side` ±1).
+pub struct Vertex<'a> {
     pub p: V3,
     pub p_err: V3,
     pub ng: V3,
     pub frame: Frame<V3>,
+    pub wo: V3,
     pub albedo: V3,
+    pub rough: (M, Option<&'a RoughConductor<Ggx<F>, V3>>),
     pub oriented: M,
     pub side: F,
 }
 
 impl Wavefront<'_> {
-    /// One light sample at the Lambertian vertices of lanes `lanes` (`one_sample`:
+    /// One light sample at the Lambertian and rough vertices of lanes `lanes` (`one_sample`:
     /// `Lights::sample`, `Material::eval_pdf`, the shadow ray of `spawn_ray_to`, the power
     /// heuristic), `u` its numbers: the lanes whose sample needs a shadow ray (the others
     /// contribute nothing), the rays' origins and directions (to be clear up to
@@ -53,11 +59,19 @@ impl Wavefront<'_> {
         let pl = planar_point(la, lb, lc, lt.triangle, ux, uy);
         let ln = V3::splat(lt.normal);
         let (dl, dist2, wi, cos_l, pdf) = towards(v.p, pl, ln, one, F::splat(lt.area));
-        // `Lambert::eval` and `pdf` on the side the path is on.
+        // `Material::eval_pdf` on the side the path is on: `Lambert::eval` and `pdf`, or the
+        // rough conductor's.
         let wil = v.frame.to_local(wi);
         let wz = wil.z * v.side;
-        let f = V3::select(v.oriented, lambert::eval(v.albedo, wz), V3::zero());
-        let bsdf_pdf = F::select(v.oriented, cosine_hemisphere_pdf_lanes(wz), zero);
+        let mut f = lambert::eval(v.albedo, wz);
+        let mut bsdf_pdf = cosine_hemisphere_pdf_lanes(wz);
+        if let (rough, Some(conductor)) = v.rough {
+            let (wo, wi) = (flip_z(v.wo, v.side), flip_z(wil, v.side));
+            f = V3::select(rough, conductor.eval_lanes(wo, wi), f);
+            bsdf_pdf = F::select(rough, conductor.pdf_lanes(wo, wi), bsdf_pdf);
+        }
+        let f = V3::select(v.oriented, f, V3::zero());
+        let bsdf_pdf = F::select(v.oriented, bsdf_pdf, zero);
         let f = f.scale(wil.z.abs());
         let shadow = lanes & !dist2.eq(zero) & !cos_l.le(zero) & !f.is_zero();
         // The shadow ray (`spawn_ray_to`), both ends pushed off their surfaces.

@@ -8,7 +8,9 @@ use super::rng::LaneSampler;
 use super::simd::{F, M, U, V3};
 use super::{trace, Bits, LaneMask, Lanes, Trace, Wavefront, GROUPS};
 use crate::scene::Interaction;
-use super::{BLACK, EMITTER, GLASS, KIND, LAMBERT, MIRROR, TWO_SIDED};
+use super::{BLACK, EMITTER, GLASS, KIND, LAMBERT, MIRROR, ROUGH, TWO_SIDED};
+use crate::material::microfacet::Ggx;
+use crate::material::rough_conductor::RoughConductor;
 use crate::film::PixelSums;
 use crate::geometry::ray::{offset_ray_origin, SHADOW_EPSILON};
 use crate::geometry::sphere::surface_point;
@@ -21,7 +23,8 @@ use crate::render::{RenderStats, TilePixel};
 
 /// What a step reads of the lanes' hits: the lanes that hit something, and at their hits
 /// the point, its error bound, the unit geometric and shading normals, and the material's
-/// flags (with `EMITTER` where the primitive emits), colour and η.
+/// flags (with `EMITTER` where the primitive emits), colour and η, and with
+/// [`Trace::Lanes`] the primitive (for [`Wavefront::conductor`]).
 struct Surface {
     hit: M,
     p: V3,
@@ -31,6 +34,7 @@ struct Surface {
     flags: U,
     colour: V3,
     eta: F,
+    prim: U,
 }
 
 impl Wavefront<'_> {
@@ -51,6 +55,53 @@ impl Wavefront<'_> {
             flags: U::lookup64(&self.flags, h.prim),
             colour: V3::lookup64(&self.colour, h.prim),
             eta: F::lookup64(&self.eta, h.prim),
+            prim: h.prim,
+        }
+    }
+
+    /// The rough conductors at the lanes' hits `sf` (`hits` with [`Trace::Scene`]), read
+    /// only where a lane has one: by primitive from the tables, or from each hit's
+    /// material. A lane's reflectance is its colour; lanes without one hold values no lane
+    /// reads.
+    #[inline(always)]
+    fn conductor(
+        &self,
+        sf: &Surface,
+        hits: &[Option<Interaction>; 16],
+    ) -> RoughConductor<Ggx<F>, V3> {
+        let (alpha_u, alpha_v, eta, k) = match self.trace {
+            Trace::Lanes => {
+                let t = &self.rough;
+                (
+                    F::lookup64(&t.alpha[0], sf.prim),
+                    F::lookup64(&t.alpha[1], sf.prim),
+                    V3::lookup64(&t.eta, sf.prim),
+                    V3::lookup64(&t.k, sf.prim),
+                )
+            }
+            Trace::Scene => {
+                let (mut alpha, mut eta, mut k) = ([[0f32; 16]; 2], [[0f32; 16]; 3], [[0f32; 16]; 3]);
+                let mut m = sf.hit.bits();
+                while m != 0 {
+                    let l = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    let Some(si) = &hits[l] else {
+                        continue;
+                    };
+                    let r = &self.materials[si.material as usize].rough;
+                    (alpha[0][l], alpha[1][l]) = (r.alpha[0], r.alpha[1]);
+                    for a in 0..3 {
+                        (eta[a][l], k[a][l]) = (r.eta[a], r.k[a]);
+                    }
+                }
+                (F::load(&alpha[0]), F::load(&alpha[1]), V3::load(&eta), V3::load(&k))
+            }
+        };
+        RoughConductor {
+            distr: Ggx { alpha_u, alpha_v },
+            eta,
+            k,
+            specular_reflectance: sf.colour,
         }
     }
 
@@ -78,6 +129,7 @@ impl Wavefront<'_> {
                 (ng[a][l], ns[a][l]) = (si.ng[a], si.ns[a]);
                 colour[a][l] = c[a];
             }
+
             let emits = si.light != crate::scene::NO_LIGHT;
             flags[l] = sh.flags | if emits { EMITTER } else { 0 };
             eta[l] = sh.eta;
@@ -91,6 +143,7 @@ impl Wavefront<'_> {
             flags: U::load(&flags),
             colour: V3::load(colour),
             eta: F::load(&eta),
+            prim: U::splat(0),
         }
     }
 
@@ -182,15 +235,21 @@ impl Wavefront<'_> {
         let frame = Frame::from_normal(sf.ns);
         let wo = frame.to_local(nd);
         let (lambert, mirror, glass) = (kind(LAMBERT), kind(MIRROR), kind(GLASS));
+        let rough = kind(ROUGH);
+        let conductor = if rough.any() {
+            Some(self.conductor(&sf, &st.hits))
+        } else {
+            None
+        };
         let front = wo.z.gt(zero);
         let oriented = glass | front | (wo.z.lt(zero) & flags.any(TWO_SIDED));
         let side = F::select(glass | front, one, F::splat(-1.0));
         let colour = sf.colour;
 
-        // Next-event estimation at the non-specular (Lambertian) vertices: with one light
-        // sample, its shadow ray and the two values `l += β·lit` can add (β times the
+        // Next-event estimation at the non-specular (Lambertian and rough) vertices: with one
+        // light sample, its shadow ray and the two values `l += β·lit` can add (β times the
         // sample's contribution, or β·0 if it is blocked) wait for `shadows`.
-        let nee = cont & lambert;
+        let nee = cont & (lambert | rough);
         st.shadow.lanes = 0;
         st.shadow.nee = nee.bits();
         if nee.any() {
@@ -200,7 +259,9 @@ impl Wavefront<'_> {
                 p_err,
                 ng,
                 frame,
+                wo,
                 albedo: colour,
+                rough: (rough, conductor.as_ref()),
                 oriented,
                 side,
             };
@@ -229,6 +290,7 @@ impl Wavefront<'_> {
             colour,
             eta,
             (lambert, mirror, glass),
+            (rough, conductor.as_ref()),
             oriented,
             side,
         );
@@ -255,7 +317,7 @@ impl Wavefront<'_> {
         bs.pdf.store(&mut st.prev_pdf);
         depth.store(&mut st.depth);
         // After a specular bounce the next emitter hit takes no MIS weight.
-        st.has_prev = (alive & lambert).bits();
+        st.has_prev = (alive & (lambert | rough)).bits();
         st.active = alive.bits();
         st.done = done.bits();
     }
