@@ -17,6 +17,7 @@
 pub(crate) mod avx2;
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod avx512;
+pub mod math;
 
 use glam::{BVec4A, Vec3, Vec3A, Vec4};
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
@@ -85,6 +86,13 @@ pub trait Float:
     fn select(m: Self::Mask, a: Self, b: Self) -> Self;
     /// Whether any lane of `m` is set (for early exits that skip work no lane needs).
     fn any(m: Self::Mask) -> bool;
+    /// 2ⁿ for n = `self`, an integer in [−126, 127]: the float whose exponent field is
+    /// n + 127 and whose significand is zero.
+    fn pow2i(self) -> Self;
+    /// (m, e) with x = m·2ᵉ and m in [1, 2), for x positive and normal: the significand
+    /// and exponent fields, read as they are (the sign is ignored; other x give other
+    /// numbers, the same in every instance).
+    fn frexp(self) -> (Self, Self);
 }
 
 /// Sixteen f32 lanes in registers ([`avx512::F`], [`avx2::F`]): what code written once for
@@ -201,6 +209,16 @@ macro_rules! one_lane {
             fn any(m: bool) -> bool {
                 m
             }
+            #[inline(always)]
+            fn pow2i(self) -> $t {
+                <$t>::from_bits(((self as i32 + 127) as u32) << 23)
+            }
+            #[inline(always)]
+            fn frexp(self) -> ($t, $t) {
+                let b = self.to_bits();
+                let m = <$t>::from_bits((b & 0x007f_ffff) | 0x3f80_0000);
+                (m, ((b >> 23) & 0xff) as $t - 127.0)
+            }
         }
     };
 }
@@ -260,6 +278,15 @@ impl Float for Vec4 {
     #[inline(always)]
     fn any(m: BVec4A) -> bool {
         m.any()
+    }
+    #[inline(always)]
+    fn pow2i(self) -> Vec4 {
+        Vec4::from_array(self.to_array().map(f32::pow2i))
+    }
+    #[inline(always)]
+    fn frexp(self) -> (Vec4, Vec4) {
+        let [a, b, c, d] = self.to_array().map(f32::frexp);
+        (Vec4::new(a.0, b.0, c.0, d.0), Vec4::new(a.1, b.1, c.1, d.1))
     }
 }
 

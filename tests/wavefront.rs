@@ -652,8 +652,8 @@ fn mirrors_and_glass_both_ways() {
     }
 }
 
-/// [`SPECULAR`] with its mirrors rough conductors of GGX microfacets: the one-sided one
-/// gold, anisotropic; the two-sided one of a given index, tinted.
+/// [`SPECULAR`] with its mirrors rough conductors: the one-sided one gold, anisotropic, of
+/// GGX microfacets; the two-sided one of a given index, tinted, of Beckmann's.
 fn rough_metals() -> String {
     let text = SPECULAR
         .replace(
@@ -662,13 +662,14 @@ fn rough_metals() -> String {
         )
         .replace(
             "[material.mirror2]\ntype = \"mirror\"\nreflectance = [0.6, 0.9, 0.9]",
-            "[material.mirror2]\ntype = \"roughconductor\"\neta = [0.2, 0.9, 1.1]\nk = [3.9, 2.4, 2.2]\nreflectance = [0.9, 0.7, 0.9]\nalpha = 0.25",
+            "[material.mirror2]\ntype = \"roughconductor\"\neta = [0.2, 0.9, 1.1]\nk = [3.9, 2.4, 2.2]\nreflectance = [0.9, 0.7, 0.9]\nalpha = 0.25\ndistribution = \"beckmann\"",
         );
     assert!(text.contains("alpha_u") && text.contains("alpha = 0.25"));
     text
 }
 
-/// Rough conductors (GGX; isotropic and anisotropic, one- and two-sided, seen from behind),
+/// Rough conductors (Beckmann and GGX, in one vector's lanes together or not; isotropic and
+/// anisotropic, one- and two-sided, seen from behind),
 /// by brute force and through the scene's own queries, with hidden emitters and both
 /// roulettes: their light samples, BSDF samples and MIS as one path at a time computes them.
 #[test]
@@ -967,12 +968,8 @@ vertices = [[2, 0.1, 0], [2, 0.1, 1], [2, 1, 0]]
             "type = \"sphere\"\nemission = [6, 6, 6]\ncenter = [0, 1.2, 0]\nradius = 0.2",
         ),
     );
-    // Rough conductors of Beckmann microfacets or textured roughness, and with several
-    // shadow rays a vertex (the batch is Lambertian).
-    declined(
-        "Beckmann microfacets",
-        &rough_metals().replace("alpha = 0.25", "alpha = 0.25\ndistribution = \"beckmann\""),
-    );
+    // Rough conductors of textured roughness, and with several shadow rays a vertex (the
+    // batch is Lambertian).
     declined(
         "textured roughness",
         &rough_metals().replace(

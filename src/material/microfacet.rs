@@ -30,6 +30,7 @@
 //!   that is continuous in the sample, as Mitsuba's `sample_visible_11`.
 
 use super::sampling::disk_concentric;
+use crate::simd::math::{exp, ln, poly};
 use crate::simd::{Float, Vector3};
 use glam::{Vec2, Vec3A};
 use std::f32::consts::PI;
@@ -110,13 +111,8 @@ impl Microfacet {
     /// D·cos θm ≤ 1e-20 are flushed to zero).
     #[inline]
     pub fn d(&self, m: Vec3A) -> f32 {
-        let (au, av) = (self.alpha_u, self.alpha_v);
         match self.kind {
-            MicrofacetType::Beckmann => {
-                let xy = (m.x / au) * (m.x / au) + (m.y / av) * (m.y / av);
-                let c2 = m.z * m.z;
-                flush((-xy / c2).exp() / (PI * au * av * c2 * c2), m.z)
-            }
+            MicrofacetType::Beckmann => self.as_beckmann().d(m),
             MicrofacetType::Ggx => self.as_ggx().d(m),
         }
     }
@@ -125,6 +121,15 @@ impl Microfacet {
     #[inline(always)]
     fn as_ggx(&self) -> Ggx<f32> {
         Ggx {
+            alpha_u: self.alpha_u,
+            alpha_v: self.alpha_v,
+        }
+    }
+
+    /// This distribution as Beckmann's of one lane.
+    #[inline(always)]
+    fn as_beckmann(&self) -> Beckmann<f32> {
+        Beckmann {
             alpha_u: self.alpha_u,
             alpha_v: self.alpha_v,
         }
@@ -141,8 +146,8 @@ impl Microfacet {
             MicrofacetType::Beckmann => {
                 // (erf(a) − 1)/2 + exp(−a²)/(2a√π), with erf(a) − 1 = −erfc(a) taken as it is
                 // rather than from erf (which would cancel to nothing for large a).
-                let a = (1.0 / t2).sqrt() as f64;
-                (0.5 * ((-a * a).exp() / (a * std::f64::consts::PI.sqrt()) - erfc_pos(a))) as f32
+                let a = (1.0 / t2).sqrt();
+                0.5 * (exp(-a * a) * INV_SQRT_PI / a - erfc_pos(a))
             }
             MicrofacetType::Ggx => 0.5 * (-1.0 + (1.0 + t2).sqrt()),
         }
@@ -152,21 +157,9 @@ impl Microfacet {
     /// about the side of m (Mitsuba's `smith_g1`).
     #[inline]
     pub fn g1(&self, v: Vec3A, m: Vec3A) -> f32 {
-        if self.kind == MicrofacetType::Ggx {
-            return self.as_ggx().g1(v, m);
-        }
-        if v.dot(m) * v.z <= 0.0 {
-            return 0.0;
-        }
-        let t2 = tan_alpha2(self.alpha_u, self.alpha_v, v);
-        if t2 == 0.0 {
-            return 1.0;
-        }
-        let a = (1.0 / t2).sqrt();
-        if a >= 1.6 {
-            1.0
-        } else {
-            (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a)
+        match self.kind {
+            MicrofacetType::Beckmann => self.as_beckmann().g1(v, m),
+            MicrofacetType::Ggx => self.as_ggx().g1(v, m),
         }
     }
 
@@ -182,27 +175,8 @@ impl Microfacet {
     pub fn sample_visible(&self, wo: Vec3A, u: Vec2) -> Vec3A {
         match self.kind {
             MicrofacetType::Ggx => self.as_ggx().sample_visible(wo, u.x, u.y),
-            MicrofacetType::Beckmann => self.sample_visible_beckmann(wo, u),
+            MicrofacetType::Beckmann => self.as_beckmann().sample_visible(wo, u.x, u.y),
         }
-    }
-
-    /// Heitz and d'Eon 2014 (stretch, sample slopes for α = 1, rotate, unstretch) with
-    /// Jakob's slope sampler; Mitsuba's `sample` with `sample_visible`.
-    #[inline]
-    fn sample_visible_beckmann(&self, wo: Vec3A, u: Vec2) -> Vec3A {
-        let w = Vec3A::new(self.alpha_u * wo.x, self.alpha_v * wo.y, wo.z).normalize();
-        // The azimuth of the stretched direction (Mitsuba's `Frame3f::sincos_phi`).
-        let s2 = w.x * w.x + w.y * w.y;
-        let (sin_phi, cos_phi) = if s2 <= 4.0 * f32::EPSILON / 2.0 {
-            (0.0, 1.0)
-        } else {
-            let inv = 1.0 / s2.sqrt();
-            ((w.y * inv).clamp(-1.0, 1.0), (w.x * inv).clamp(-1.0, 1.0))
-        };
-        let s = beckmann_slopes_11(w.z, u);
-        let sx = (cos_phi * s.x - sin_phi * s.y) * self.alpha_u;
-        let sy = (sin_phi * s.x + cos_phi * s.y) * self.alpha_v;
-        Vec3A::new(-sx, -sy, 1.0).normalize()
     }
 
     /// Density of `sample_visible` over microfacet normals: D_wo(m) = G1(wo, m)·|wo·m|·D(m)
@@ -312,6 +286,125 @@ impl<V: Vector3> Distribution<V> for Ggx<V::F> {
     }
 }
 
+/// Beckmann's distribution of roughness (`alpha_u`, `alpha_v`) in each lane, clamped as
+/// [`Microfacet::new`] clamps it: [`Microfacet`]'s Beckmann, whose methods call these.
+#[derive(Clone, Copy, Debug)]
+pub struct Beckmann<F> {
+    pub alpha_u: F,
+    pub alpha_v: F,
+}
+
+impl<V: Vector3> Distribution<V> for Beckmann<V::F> {
+    #[inline(always)]
+    fn d(&self, m: V) -> V::F {
+        let (au, av) = (self.alpha_u, self.alpha_v);
+        let (x, y) = (m.x() / au, m.y() / av);
+        let xy = x * x + y * y;
+        let c2 = m.z() * m.z();
+        let pi = V::F::splat(PI);
+        flush(exp(-xy / c2) / (pi * au * av * c2 * c2), m.z())
+    }
+
+    /// Walter's rational approximation of 1/(1 + Λ) (1 for a ≥ 1.6).
+    #[inline(always)]
+    fn g1(&self, v: V, m: V) -> V::F {
+        let (zero, one, k) = (V::F::zero(), V::F::splat(1.0), V::F::splat);
+        let t2 = tan_alpha2(self.alpha_u, self.alpha_v, v);
+        let a = (one / t2).sqrt();
+        // (The rational function only where a lane needs it.)
+        let near = !a.ge(k(1.6));
+        let mut g = one;
+        if V::F::any(near) {
+            let r = (k(3.535) * a + k(2.181) * a * a) / (one + k(2.276) * a + k(2.577) * a * a);
+            g = V::F::select(near, r, one);
+        }
+        let g = V::F::select(t2.eq(zero), one, g);
+        V::F::select((v.dot(m) * v.z()).le(zero), zero, g)
+    }
+
+    /// Heitz and d'Eon 2014 (stretch, sample slopes for α = 1, rotate, unstretch) with
+    /// Jakob's slope sampler; Mitsuba's `sample` with `sample_visible`.
+    #[inline(always)]
+    fn sample_visible(&self, wo: V, ux: V::F, uy: V::F) -> V {
+        let (au, av) = (self.alpha_u, self.alpha_v);
+        let (zero, one, k) = (V::F::zero(), V::F::splat(1.0), V::F::splat);
+        let w = V::new(au * wo.x(), av * wo.y(), wo.z()).normalize();
+        // The azimuth of the stretched direction (Mitsuba's `Frame3f::sincos_phi`).
+        let s2 = w.x() * w.x() + w.y() * w.y();
+        let along = s2.le(k(4.0 * f32::EPSILON / 2.0));
+        let inv = one / s2.sqrt();
+        let sin_phi = V::F::select(along, zero, clamp(w.y() * inv, -one, one));
+        let cos_phi = V::F::select(along, one, clamp(w.x() * inv, -one, one));
+        let (sx, sy) = beckmann_slopes_11(w.z(), ux, uy);
+        let x = (cos_phi * sx - sin_phi * sy) * au;
+        let y = (sin_phi * sx + cos_phi * sy) * av;
+        V::new(-x, -y, one).normalize()
+    }
+}
+
+/// `f32::clamp` over lanes: `lo` below it, `hi` above it, x itself otherwise (NaN too).
+#[inline(always)]
+fn clamp<T: Float>(x: T, lo: T, hi: T) -> T {
+    T::select(x.lt(lo), lo, T::select(x.gt(hi), hi, x))
+}
+
+/// Beckmann's distribution in the lanes of `beckmann`, GGX in the others, each of roughness
+/// (`alpha_u`, `alpha_v`): the wavefront's, whose lanes hold different materials. Each
+/// method computes a distribution's value only where a lane has it.
+#[derive(Clone, Copy, Debug)]
+pub struct Either<F: Float> {
+    pub beckmann: F::Mask,
+    pub alpha_u: F,
+    pub alpha_v: F,
+}
+
+impl<F: Float> Either<F> {
+    /// The two distributions, and which of them the lanes have: (any Beckmann, any GGX).
+    #[inline(always)]
+    fn parts(&self) -> (Beckmann<F>, Ggx<F>, bool, bool) {
+        let (alpha_u, alpha_v) = (self.alpha_u, self.alpha_v);
+        (
+            Beckmann { alpha_u, alpha_v },
+            Ggx { alpha_u, alpha_v },
+            F::any(self.beckmann),
+            F::any(!self.beckmann),
+        )
+    }
+}
+
+impl<V: Vector3> Distribution<V> for Either<V::F> {
+    #[inline(always)]
+    fn d(&self, m: V) -> V::F {
+        match self.parts() {
+            (b, _, true, false) => b.d(m),
+            (_, g, false, _) => g.d(m),
+            (b, g, true, true) => V::F::select(self.beckmann, b.d(m), g.d(m)),
+        }
+    }
+
+    #[inline(always)]
+    fn g1(&self, v: V, m: V) -> V::F {
+        match self.parts() {
+            (b, _, true, false) => b.g1(v, m),
+            (_, g, false, _) => g.g1(v, m),
+            (b, g, true, true) => V::F::select(self.beckmann, b.g1(v, m), g.g1(v, m)),
+        }
+    }
+
+    #[inline(always)]
+    fn sample_visible(&self, wo: V, ux: V::F, uy: V::F) -> V {
+        match self.parts() {
+            (b, _, true, false) => b.sample_visible(wo, ux, uy),
+            (_, g, false, _) => g.sample_visible(wo, ux, uy),
+            (b, g, true, true) => V::select(
+                self.beckmann,
+                b.sample_visible(wo, ux, uy),
+                g.sample_visible(wo, ux, uy),
+            ),
+        }
+    }
+}
+
 /// D where D·cos θm > 1e-20, else zero (Mitsuba's flush; NaN, m in the plane, fails the
 /// comparison too).
 #[inline(always)]
@@ -332,97 +425,111 @@ fn tan_alpha2<V: Vector3>(alpha_u: V::F, alpha_v: V::F, v: V) -> V::F {
 /// in the xz-plane (Jakob 2014): the x slope inverts its CDF, 1 + x + tan θ·exp(−erfinv(x)²)/√π
 /// over its maximum, in the erf domain x = erf(slope) by three Newton steps from the exact
 /// solution for θ = π/2; the y slope is Gaussian, independent. Mitsuba's `sample_visible_11`.
-fn beckmann_slopes_11(cos_theta: f32, u: Vec2) -> Vec2 {
-    let tan_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt() / cos_theta;
-    let cot_theta = 1.0 / tan_theta;
+#[inline(always)]
+fn beckmann_slopes_11<T: Float>(cos_theta: T, ux: T, uy: T) -> (T, T) {
+    let (zero, one, k) = (T::zero(), T::splat(1.0), T::splat);
+    let tan_theta = (one - cos_theta * cos_theta).max_num(zero).sqrt() / cos_theta;
+    let cot_theta = one / tan_theta;
     // The search interval [−1, maxval] in the erf domain.
-    let maxval = erf(cot_theta as f64) as f32;
-    let u = u.clamp(Vec2::splat(1e-6), Vec2::splat(1.0 - 1e-6));
-    let mut x = maxval - (maxval + 1.0) * erf((-u.x.ln()).sqrt() as f64) as f32;
+    let maxval = erf(cot_theta);
+    let (lo, hi) = (k(1e-6), k(1.0 - 1e-6));
+    let (ux, uy) = (ux.max_num(lo).min_num(hi), uy.max_num(lo).min_num(hi));
+    let mut x = maxval - (maxval + one) * erf((-ln(ux)).sqrt());
     // Normalisation of the CDF.
-    let target = u.x * (1.0 + maxval + INV_SQRT_PI * tan_theta * (-cot_theta * cot_theta).exp());
+    let c = k(INV_SQRT_PI);
+    let target = ux * (one + maxval + c * tan_theta * exp(-cot_theta * cot_theta));
     for _ in 0..3 {
         let slope = erfinv(x);
-        let value = 1.0 + x + INV_SQRT_PI * tan_theta * (-slope * slope).exp() - target;
-        let derivative = 1.0 - slope * tan_theta;
-        x -= value / derivative;
+        let value = one + x + c * tan_theta * exp(-slope * slope) - target;
+        let derivative = one - slope * tan_theta;
+        x = x - value / derivative;
     }
-    Vec2::new(erfinv(x), erfinv(2.0 * u.y - 1.0))
+    (erfinv(x), erfinv(k(2.0) * uy - one))
 }
 
-/// The error function: 1 − erfc(|x|), signed (absolute error below 1.2·10⁻⁷, what the
-/// sampler's f32 arithmetic keeps of it).
-fn erf(x: f64) -> f64 {
-    (1.0 - erfc_pos(x.abs())).copysign(x)
+/// The error function: 1 − erfc(|x|), signed (absolute error below 2·10⁻⁷: the fit's 1.2·10⁻⁷
+/// and f32's rounding).
+#[inline(always)]
+fn erf<T: Float>(x: T) -> T {
+    (T::splat(1.0) - erfc_pos(x.abs())).copysign(x)
 }
 
-/// erfc(z) for z ≥ 0, with a fractional error below 1.2·10⁻⁷ everywhere (Numerical Recipes
-/// 2nd ed., §6.2, `erfcc`: t·exp(−z² + P(t)), t = 1/(1 + z/2), a Chebyshev fit), finer than
-/// the f32 numbers the sampler makes of it (Dr.Jit's `erf`, which Mitsuba's sampler uses, is
-/// a fit of this order too). It replaced a 28-term Chebyshev series to double precision,
-/// whose recurrence is a chain of 27 dependent steps: with the Newton step of `erfinv`, seven
-/// of them a Beckmann sample took half the time of a Cornell box of rough conductors.
-fn erfc_pos(z: f64) -> f64 {
-    const P: [f64; 10] = [
-        -1.265_512_23,
-        1.000_023_68,
-        0.374_091_96,
-        0.096_784_18,
-        -0.186_288_06,
-        0.278_868_07,
-        -1.135_203_98,
-        1.488_515_87,
-        -0.822_152_23,
-        0.170_872_77,
-    ];
-    let t = 1.0 / (1.0 + 0.5 * z);
-    let p = P.iter().rev().fold(0.0, |acc, &c| c + t * acc);
-    t * (p - z * z).exp()
+/// erfc(z) for z ≥ 0, the fit with a fractional error below 1.2·10⁻⁷ everywhere of Numerical
+/// Recipes (2nd ed., §6.2, `erfcc`: t·exp(−z² + P(t)), t = 1/(1 + z/2), a Chebyshev fit),
+/// in f32 (Dr.Jit's `erf`, which Mitsuba's sampler uses, is a fit of this order too). It
+/// replaced a 28-term Chebyshev series to double precision, whose recurrence is a chain of
+/// 27 dependent steps: with the Newton step of `erfinv`, seven of them a Beckmann sample
+/// took half the time of a Cornell box of rough conductors.
+#[allow(clippy::excessive_precision)]
+#[inline(always)]
+fn erfc_pos<T: Float>(z: T) -> T {
+    let (one, k) = (T::splat(1.0), T::splat);
+    let t = one / (one + k(0.5) * z);
+    let p = poly(
+        t,
+        [
+            -1.265_512_23,
+            1.000_023_68,
+            0.374_091_96,
+            0.096_784_18,
+            -0.186_288_06,
+            0.278_868_07,
+            -1.135_203_98,
+            1.488_515_87,
+            -0.822_152_23,
+            0.170_872_77,
+        ],
+    );
+    t * exp(p - z * z)
 }
 
-/// The inverse error function on (−1, 1): Giles, "Approximating the erfinv function", GPU
-/// Computing Gems Jade Edition, 2011, the single-precision polynomials (relative error about
-/// 4·10⁻⁷; Dr.Jit's `erfinv`, as Mitsuba's sampler uses it).
+/// The inverse error function on (−1, 1) (±∞ at ±1): Giles, "Approximating the erfinv
+/// function", GPU Computing Gems Jade Edition, 2011, the single-precision polynomials
+/// (relative error about 4·10⁻⁷; Dr.Jit's `erfinv`, as Mitsuba's sampler uses it), both
+/// branches evaluated and one chosen, as lanes must.
 // (The coefficients as Giles prints them, some with more digits than an f32 holds.)
 #[allow(clippy::excessive_precision)]
-fn erfinv(x: f32) -> f32 {
-    if x <= -1.0 {
-        return f32::NEG_INFINITY;
-    }
-    if x >= 1.0 {
-        return f32::INFINITY;
-    }
-    let mut w = -((1.0 - x) * (1.0 + x)).ln();
-    let p = if w < 5.0 {
-        w -= 2.5;
+#[inline(always)]
+fn erfinv<T: Float>(x: T) -> T {
+    let (one, k) = (T::splat(1.0), T::splat);
+    let w = -ln((one - x) * (one + x));
+    let central = poly(
+        w - k(2.5),
         [
-            3.432_739_39e-07,
-            -3.523_387_7e-06,
-            -4.391_506_54e-06,
-            0.000_218_580_87,
-            -0.001_253_725_03,
-            -0.004_177_681_64,
-            0.246_640_727,
             1.501_409_41,
-        ]
-        .iter()
-        .fold(2.810_226_36e-08, |p, &c| c + p * w)
-    } else {
-        w = w.sqrt() - 3.0;
+            0.246_640_727,
+            -0.004_177_681_64,
+            -0.001_253_725_03,
+            0.000_218_580_87,
+            -4.391_506_54e-06,
+            -3.523_387_7e-06,
+            3.432_739_39e-07,
+            2.810_226_36e-08,
+        ],
+    );
+    // The tail (|x| > 0.9966) only where a lane needs it.
+    let far = !w.lt(k(5.0));
+    if !T::any(far) {
+        return central * x;
+    }
+    let t = w.sqrt() - k(3.0);
+    let tail = poly(
+        t,
         [
-            0.000_100_950_558,
-            0.001_349_343_22,
-            -0.003_673_428_44,
-            0.005_739_507_73,
-            -0.007_622_461_3,
-            0.009_438_870_47,
-            1.001_674_06,
             2.832_976_82,
-        ]
-        .iter()
-        .fold(-0.000_200_214_257, |p, &c| c + p * w)
-    };
-    p * x
+            1.001_674_06,
+            0.009_438_870_47,
+            -0.007_622_461_3,
+            0.005_739_507_73,
+            -0.003_673_428_44,
+            0.001_349_343_22,
+            0.000_100_950_558,
+            -0.000_200_214_257,
+        ],
+    );
+    let r = T::select(far, tail, central) * x;
+    let r = T::select(x.ge(one), k(f32::INFINITY), r);
+    T::select(x.le(-one), k(f32::NEG_INFINITY), r)
 }
 
 /// Reflects `wo` about the microfacet normal `m`.
@@ -442,7 +549,7 @@ mod tests {
     use super::*;
 
     /// erfc and erf against Python's `math.erfc` and `math.erf` (to double precision), and
-    /// erfinv as erf's inverse: each within the error its fit claims. (A coefficient off by
+    /// erfinv as erf's inverse: each within the error its fit claims and f32's rounding. (A coefficient off by
     /// 10⁻⁵, in either fit's either branch, fails it.)
     #[test]
     fn error_functions_match_known_values() {
@@ -456,13 +563,19 @@ mod tests {
             (3.0, 0.9999779095030014, 2.2090496998585438e-05),
             (4.0, 0.9999999845827421, 1.541725790028002e-08),
         ] {
-            let e = erfc_pos(x);
+            let x = x as f32;
+            let e = erfc_pos(x) as f64;
+            // The fit's error, plus f32's: e^(P − z²) turns the exponent's rounding (half an
+            // ulp of about z² + 1.3) into a relative error, and the rest rounds a few times.
+            let ulp = f32::EPSILON as f64 / 2.0;
+            let tol = 1.2e-7 + ((x * x) as f64 + 1.3) * ulp + 4.0 * ulp;
             assert!(
-                (e - erfc_x).abs() <= 1.2e-7 * erfc_x,
+                (e - erfc_x).abs() <= tol * erfc_x,
                 "erfc({x}) = {e}, not {erfc_x}"
             );
+            // erf = 1 − erfc: erfc's error, and the subtraction's rounding.
             assert!(
-                (erf(x) - erf_x).abs() <= 1.2e-7,
+                (erf(x) as f64 - erf_x).abs() <= 2.5e-7,
                 "erf({x}) = {}, not {erf_x}",
                 erf(x)
             );

@@ -180,6 +180,36 @@ impl Float for F {
             _mm256_or_ps(m.0[h], _mm256_and_ps(sign.0[h], bit))
         }))
     }
+    /// (n + 127)·2²³, exact in f32, is as an integer the bits of 2ⁿ (AVX's conversions
+    /// and float arithmetic: no AVX2 integer instruction).
+    #[inline(always)]
+    fn pow2i(self) -> F {
+        F(both!(h => unsafe {
+            let biased = _mm256_add_ps(self.0[h], _mm256_set1_ps(127.0));
+            _mm256_castsi256_ps(_mm256_cvtps_epi32(_mm256_mul_ps(
+                biased,
+                _mm256_set1_ps(8_388_608.0),
+            )))
+        }))
+    }
+    /// The fields masked out with AVX's float `and`; the exponent field, as an integer,
+    /// converted exactly and scaled down by 2²³.
+    #[inline(always)]
+    fn frexp(self) -> (F, F) {
+        let m = F(both!(h => unsafe {
+            let fraction = _mm256_castsi256_ps(_mm256_set1_epi32(0x007f_ffff));
+            _mm256_or_ps(_mm256_and_ps(self.0[h], fraction), _mm256_set1_ps(1.0))
+        }));
+        let e = F(both!(h => unsafe {
+            let field = _mm256_castsi256_ps(_mm256_set1_epi32(0x7f80_0000));
+            let biased = _mm256_cvtepi32_ps(_mm256_castps_si256(_mm256_and_ps(self.0[h], field)));
+            _mm256_sub_ps(
+                _mm256_mul_ps(biased, _mm256_set1_ps(1.0 / 8_388_608.0)),
+                _mm256_set1_ps(127.0),
+            )
+        }));
+        (m, e)
+    }
 }
 
 impl Sixteen for F {

@@ -122,6 +122,29 @@ impl Float for F {
             )))
         }
     }
+    /// (n + 127)·2²³, exact in f32, is as an integer the bits of 2ⁿ.
+    #[inline(always)]
+    fn pow2i(self) -> F {
+        F(unsafe {
+            let biased = _mm512_add_ps(self.0, _mm512_set1_ps(127.0));
+            _mm512_castsi512_ps(_mm512_cvtps_epi32(_mm512_mul_ps(
+                biased,
+                _mm512_set1_ps(8_388_608.0),
+            )))
+        })
+    }
+    #[inline(always)]
+    fn frexp(self) -> (F, F) {
+        unsafe {
+            let b = _mm512_castps_si512(self.0);
+            let fraction = _mm512_and_si512(b, _mm512_set1_epi32(0x007f_ffff));
+            let m = _mm512_or_si512(fraction, _mm512_set1_epi32(0x3f80_0000));
+            let field =
+                _mm512_srli_epi32::<23>(_mm512_and_si512(b, _mm512_set1_epi32(0x7f80_0000)));
+            let e = _mm512_sub_ps(_mm512_cvtepi32_ps(field), _mm512_set1_ps(127.0));
+            (F(_mm512_castsi512_ps(m)), F(e))
+        }
+    }
 }
 
 impl Sixteen for F {

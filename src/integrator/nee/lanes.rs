@@ -189,6 +189,20 @@ mod avx {
         fn any(m: M8) -> bool {
             unsafe { _mm256_movemask_ps(m.0) != 0 }
         }
+        // (Only exp and log use these two, and the light batch calls neither.)
+        #[inline(always)]
+        fn pow2i(self) -> Self {
+            let mut a = [0.0; 8];
+            self.store(&mut a);
+            F8::load(&a.map(f32::pow2i))
+        }
+        #[inline(always)]
+        fn frexp(self) -> (Self, Self) {
+            let mut a = [0.0; 8];
+            self.store(&mut a);
+            let p = a.map(f32::frexp);
+            (F8::load(&p.map(|p| p.0)), F8::load(&p.map(|p| p.1)))
+        }
     }
 
     impl Lanes for F8 {

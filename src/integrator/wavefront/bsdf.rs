@@ -3,7 +3,7 @@
 //! BSDFs of [`crate::material`] instanced for the lanes.
 
 use super::simd::{F, M, V3};
-use crate::material::microfacet::Ggx;
+use crate::material::microfacet::Either;
 use crate::material::rough_conductor::RoughConductor;
 use crate::material::{dielectric, lambert};
 use crate::simd::{Float, Vector3};
@@ -32,7 +32,7 @@ pub fn sample(
     colour: V3,
     eta: F,
     (lambert, mirror, glass): (M, M, M),
-    (rough, conductor): (M, Option<&RoughConductor<Ggx<F>, V3>>),
+    (rough, conductor): (M, Option<&RoughConductor<Either<F>, V3>>),
     oriented: M,
     side: F,
 ) -> Sample {

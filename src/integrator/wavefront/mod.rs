@@ -38,7 +38,7 @@
 //! masks, the roulette).
 //!
 //! The scenes it takes ([`Wavefront::new`]): every material Lambertian (one- or two-sided),
-//! a mirror, smooth glass, a rough conductor of GGX microfacets (isotropic or not) or black,
+//! a mirror, smooth glass, a rough conductor (Beckmann or GGX, isotropic or not) or black,
 //! their colours constant or textured (looked up at each hit as `Scene::material_at` does,
 //! so not with brute force; a rough conductor's not), none with a normal or bump map; one
 //! light, a triangle or a parallelogram of constant radiance; a pinhole or perspective
@@ -113,11 +113,13 @@ const LAMBERT: u32 = 0;
 const MIRROR: u32 = 1;
 const GLASS: u32 = 2;
 const BLACK: u32 = 3;
-/// A rough conductor of GGX microfacets.
+/// A rough conductor...
 const ROUGH: u32 = 4;
-/// ...whether it is two-sided, and whether it emits.
+/// ...whether it is two-sided, whether it emits, and whether a rough conductor's microfacets
+/// are Beckmann's (else GGX).
 const TWO_SIDED: u32 = 8;
 const EMITTER: u32 = 16;
+const BECKMANN: u32 = 32;
 
 /// A scene prepared for sixteen paths at a time: how its rays are traced, and what shading
 /// reads, per primitive in tables of 64 for lane lookups (brute force) or per material.
@@ -220,7 +222,7 @@ struct Shading {
     masked: bool,
 }
 
-/// A rough conductor's GGX roughness (as `Microfacet::new` clamps it) and complex index of
+/// A rough conductor's roughness (as `Microfacet::new` clamps it) and complex index of
 /// refraction η + ik; other materials' are never read (those of a smooth surface).
 #[derive(Clone, Copy, Debug)]
 struct Rough {
@@ -255,7 +257,7 @@ impl RoughTables {
 
 impl Shading {
     /// The material as the lanes shade it, if they do: a Lambertian, a mirror, smooth glass
-    /// of unit factors, a GGX rough conductor, or black; colours constant or textured (not a
+    /// of unit factors, a rough conductor, or black; colours constant or textured (not a
     /// rough conductor's); no normal or bump map.
     fn of(material: &crate::material::Material) -> Option<Shading> {
         if material.perturbs() || material.mix.is_some() {
@@ -277,8 +279,12 @@ impl Shading {
             _ => Rough::NONE,
         };
         let two_sided = if material.two_sided { TWO_SIDED } else { 0 };
+        let beckmann = match &material.bsdf {
+            Bsdf::RoughConductor(b) if b.distr.kind == MicrofacetType::Beckmann => BECKMANN,
+            _ => 0,
+        };
         Some(Shading {
-            flags: kind | two_sided,
+            flags: kind | two_sided | beckmann,
             colour,
             eta,
             rough,
@@ -293,9 +299,7 @@ impl Shading {
         let (kind, colour, eta) = match bsdf {
             Bsdf::Lambert(b) => (LAMBERT, b.albedo, 1.0),
             Bsdf::Mirror(b) => (MIRROR, b.reflectance, 1.0),
-            Bsdf::RoughConductor(b) if b.distr.kind == MicrofacetType::Ggx => {
-                (ROUGH, b.specular_reflectance, 1.0)
-            }
+            Bsdf::RoughConductor(b) => (ROUGH, b.specular_reflectance, 1.0),
             Bsdf::Dielectric(b) => {
                 // (Glass with factors other than 1 takes the scalar path.)
                 if b.specular_reflectance != crate::Color::ONE

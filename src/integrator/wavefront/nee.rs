@@ -14,7 +14,7 @@ use crate::integrator::nee::{lambert_weight, shadow_dir, wrap};
 use crate::integrator::RayStats;
 use crate::light::{planar_point, towards};
 use crate::material::lambert;
-use crate::material::microfacet::Ggx;
+use crate::material::microfacet::Either;
 use crate::material::rough_conductor::RoughConductor;
 use crate::material::sampling::cosine_hemisphere_pdf_lanes;
 use crate::material::sampling::power_heuristic_lanes;
@@ -33,7 +33,7 @@ pub struct Vertex<'a> {
     pub frame: Frame<V3>,
     pub wo: V3,
     pub albedo: V3,
-    pub rough: (M, Option<&'a RoughConductor<Ggx<F>, V3>>),
+    pub rough: (M, Option<&'a RoughConductor<Either<F>, V3>>),
     pub oriented: M,
     pub side: F,
 }

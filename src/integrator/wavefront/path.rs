@@ -8,8 +8,8 @@ use super::rng::LaneSampler;
 use super::simd::{F, M, U, V3};
 use super::{trace, Bits, LaneMask, Lanes, Trace, Wavefront, GROUPS};
 use crate::scene::Interaction;
-use super::{BLACK, EMITTER, GLASS, KIND, LAMBERT, MIRROR, ROUGH, TWO_SIDED};
-use crate::material::microfacet::Ggx;
+use super::{BECKMANN, BLACK, EMITTER, GLASS, KIND, LAMBERT, MIRROR, ROUGH, TWO_SIDED};
+use crate::material::microfacet::Either;
 use crate::material::rough_conductor::RoughConductor;
 use crate::film::PixelSums;
 use crate::geometry::ray::{offset_ray_origin, SHADOW_EPSILON};
@@ -68,7 +68,7 @@ impl Wavefront<'_> {
         &self,
         sf: &Surface,
         hits: &[Option<Interaction>; 16],
-    ) -> RoughConductor<Ggx<F>, V3> {
+    ) -> RoughConductor<Either<F>, V3> {
         let (alpha_u, alpha_v, eta, k) = match self.trace {
             Trace::Lanes => {
                 let t = &self.rough;
@@ -98,7 +98,11 @@ impl Wavefront<'_> {
             }
         };
         RoughConductor {
-            distr: Ggx { alpha_u, alpha_v },
+            distr: Either {
+                beckmann: sf.flags.any(BECKMANN),
+                alpha_u,
+                alpha_v,
+            },
             eta,
             k,
             specular_reflectance: sf.colour,
