@@ -653,8 +653,9 @@ fn mirrors_and_glass_both_ways() {
 }
 
 /// [`SPECULAR`] with its mirrors rough conductors: the one-sided one gold, anisotropic, of
-/// GGX microfacets; the two-sided one of a given index, tinted, of Beckmann's.
-fn rough_metals() -> String {
+/// GGX microfacets; the two-sided one of a given index, tinted, of Beckmann's; and its dense
+/// glass rough (GGX, between two media).
+fn rough_materials() -> String {
     let text = SPECULAR
         .replace(
             "[material.mirror1]\ntype = \"mirror\"\nreflectance = [0.9, 0.8, 0.7]",
@@ -663,25 +664,31 @@ fn rough_metals() -> String {
         .replace(
             "[material.mirror2]\ntype = \"mirror\"\nreflectance = [0.6, 0.9, 0.9]",
             "[material.mirror2]\ntype = \"roughconductor\"\neta = [0.2, 0.9, 1.1]\nk = [3.9, 2.4, 2.2]\nreflectance = [0.9, 0.7, 0.9]\nalpha = 0.25\ndistribution = \"beckmann\"",
+        )
+        .replace(
+            "[material.dense]\ntype = \"dielectric\"",
+            "[material.dense]\ntype = \"roughdielectric\"\nalpha = 0.3",
         );
-    assert!(text.contains("alpha_u") && text.contains("alpha = 0.25"));
+    assert!(
+        text.contains("alpha_u") && text.contains("alpha = 0.25") && text.contains("alpha = 0.3")
+    );
     text
 }
 
 /// Rough conductors (Beckmann and GGX, in one vector's lanes together or not; isotropic and
-/// anisotropic, one- and two-sided, seen from behind),
+/// anisotropic, one- and two-sided, seen from behind) and rough glass,
 /// by brute force and through the scene's own queries, with hidden emitters and both
 /// roulettes: their light samples, BSDF samples and MIS as one path at a time computes them.
 #[test]
-fn rough_conductors_both_ways() {
+fn rough_materials_both_ways() {
     if !cpu_runs_it() {
         return;
     }
     use mcrt::integrator::RussianRoulette;
-    let smooth = rough_metals() + &smooth_ball([0.0, 1.7, -1.2], 0.3, "mirror2", 6, 10);
+    let smooth = rough_materials() + &smooth_ball([0.0, 1.7, -1.2], 0.3, "mirror2", 6, 10);
     for (k, (text, brute, hide, rr)) in [
-        (rough_metals(), true, false, None),
-        (rough_metals(), true, true, Some(0.6)),
+        (rough_materials(), true, false, None),
+        (rough_materials(), true, true, Some(0.6)),
         (smooth, false, false, None),
     ]
     .into_iter()
@@ -703,7 +710,7 @@ fn rough_conductors_both_ways() {
         }
         let w = Wavefront::new(&scene, &s);
         assert!(w.is_some_and(|w| w.is_brute_force() == brute), "case {k}");
-        let what = format!("rough conductors, brute force {brute}, hide {hide}, {rr:?}");
+        let what = format!("rough materials, brute force {brute}, hide {hide}, {rr:?}");
         let (film, _) = same_both_ways(scene, &s, &what);
         assert!(
             film.sum_f64().iter().flatten().sum::<f64>() > 0.0,
@@ -972,12 +979,12 @@ vertices = [[2, 0.1, 0], [2, 0.1, 1], [2, 1, 0]]
     // batch is Lambertian).
     declined(
         "textured roughness",
-        &rough_metals().replace(
+        &rough_materials().replace(
             "[material.mirror2]",
             "[texture.checks]\ntype = \"checkerboard\"\ncolor0 = [0.1, 0.1, 0.1]\ncolor1 = [0.3, 0.3, 0.3]\n[material.mirror2]",
         ).replace("alpha = 0.25", "alpha = \"checks\""),
     );
-    let scene = scene_from(&rough_metals());
+    let scene = scene_from(&rough_materials());
     let mut s = settings(&scene, FileSettings::default());
     assert!(Wavefront::new(&scene, &s).is_some(), "rough conductors");
     s.params.shadow_rays = 2;

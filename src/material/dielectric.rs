@@ -52,15 +52,22 @@ pub fn fresnel_dielectric_lanes<T: Float>(cos_i: T, eta: T) -> T {
 /// `eta` is inside over outside; a negative `cos_i` means the light arrives from inside.
 #[inline]
 pub fn fresnel_refraction(cos_i: f32, eta: f32) -> (f32, f32, f32, f32) {
-    let (eta_it, eta_ti) = if cos_i >= 0.0 {
-        (eta, 1.0 / eta)
-    } else {
-        (1.0 / eta, eta)
-    };
-    let cos_t2 = 1.0 - (1.0 - cos_i * cos_i) * eta_ti * eta_ti;
-    let cos_t = cos_t2.max(0.0).sqrt();
-    let f = fresnel_dielectric(cos_i, eta);
-    (f, if cos_i >= 0.0 { -cos_t } else { cos_t }, eta_it, eta_ti)
+    fresnel_refraction_lanes(cos_i, eta)
+}
+
+/// [`fresnel_refraction`] over any lanes.
+#[inline(always)]
+pub fn fresnel_refraction_lanes<T: Float>(cos_i: T, eta: T) -> (T, T, T, T) {
+    let (zero, one) = (T::zero(), T::splat(1.0));
+    let outside = cos_i.ge(zero);
+    let (eta_it, eta_ti) = (
+        T::select(outside, eta, one / eta),
+        T::select(outside, one / eta, eta),
+    );
+    let cos_t2 = one - (one - cos_i * cos_i) * eta_ti * eta_ti;
+    let cos_t = cos_t2.max_num(zero).sqrt();
+    let f = fresnel_dielectric_lanes(cos_i, eta);
+    (f, T::select(outside, -cos_t, cos_t), eta_it, eta_ti)
 }
 
 /// Refracts `wi` (pointing away from the surface) through the interface with local normal +z.

@@ -15,9 +15,15 @@
 //! probability F and 1 − F. Mitsuba's `specular_reflectance` and `specular_transmittance`
 //! scale the two (1 for physical realism).
 
-use super::dielectric::{fresnel_dielectric, fresnel_refraction};
-use super::microfacet::{reflect_about, Microfacet};
+//!
+//! The maths is written once over lanes (`eval_lanes`, `pdf_lanes`, `sample_lanes`, of unit
+//! factors: the callers apply them): one path's BSDF calls them with a [`Microfacet`], the
+//! wavefront's lanes with a `microfacet::Either`.
+
+use super::dielectric::{fresnel_dielectric_lanes, fresnel_refraction_lanes};
+use super::microfacet::{reflect_about_lanes, Distribution, Microfacet};
 use super::{BsdfSample, TransportMode};
+use crate::simd::{Float, Mask, Vector3};
 use crate::Color;
 use glam::{Vec2, Vec3A};
 
@@ -33,12 +39,19 @@ pub struct RoughDielectric {
 
 /// The generalised half vector of `wo` and `wi` on the upper hemisphere, whether the pair
 /// reflects, and η (index ratio in the direction of travel, n_i/n_o).
-#[inline]
-fn half_vector(wo: Vec3A, wi: Vec3A, eta: f32) -> (Vec3A, bool, f32) {
-    let reflect = wo.z * wi.z > 0.0;
-    let eta = if wo.z > 0.0 { eta } else { 1.0 / eta };
-    let m = (wo + wi * if reflect { 1.0 } else { eta }).normalize();
-    (if m.z < 0.0 { -m } else { m }, reflect, eta)
+#[inline(always)]
+fn half_vector<V: Vector3>(wo: V, wi: V, eta: V::F) -> (V, Mask<V>, V::F) {
+    let (zero, one) = (V::F::zero(), V::F::splat(1.0));
+    let reflect = (wo.z() * wi.z()).gt(zero);
+    let eta = V::F::select(wo.z().gt(zero), eta, one / eta);
+    let m = (wo + wi.scale(V::F::select(reflect, one, eta))).normalize();
+    (V::select(m.z().lt(zero), -m, m), reflect, eta)
+}
+
+/// Lanes where x is finite.
+#[inline(always)]
+fn finite<T: Float>(x: T) -> T::Mask {
+    x.abs().lt(T::splat(f32::INFINITY))
 }
 
 impl RoughDielectric {
@@ -53,31 +66,8 @@ impl RoughDielectric {
 
     #[inline]
     pub fn eval(&self, wo: Vec3A, wi: Vec3A, mode: TransportMode) -> Color {
-        if wo.z == 0.0 || wi.z == 0.0 {
-            return Color::ZERO;
-        }
-        let (m, reflect, eta) = half_vector(wo, wi, self.eta);
-        let d = self.distr.d(m);
-        if d == 0.0 {
-            return Color::ZERO;
-        }
-        let (wo_m, wi_m) = (wo.dot(m), wi.dot(m));
-        let f = fresnel_dielectric(wo_m, self.eta);
-        let g = self.distr.g(wo, wi, m);
-        let v = if reflect {
-            f * d * g / (4.0 * wo.z.abs() * wi.z.abs())
-        } else {
-            let scale = match mode {
-                TransportMode::Radiance => 1.0 / (eta * eta),
-                TransportMode::Importance => 1.0,
-            };
-            let denom = wo_m + eta * wi_m;
-            (scale * (1.0 - f) * d * g * eta * eta * wo_m * wi_m / (wo.z * wi.z * denom * denom))
-                .abs()
-        };
-        if !v.is_finite() {
-            Color::ZERO
-        } else if reflect {
+        let (v, reflect) = eval_lanes(&self.distr, self.eta, wo, wi, mode);
+        if reflect {
             self.specular_reflectance * v
         } else {
             self.specular_transmittance * v
@@ -86,79 +76,168 @@ impl RoughDielectric {
 
     #[inline]
     pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
-        if wo.z == 0.0 || wi.z == 0.0 {
-            return 0.0;
-        }
-        let (m, reflect, eta) = half_vector(wo, wi, self.eta);
-        let (wo_m, wi_m) = (wo.dot(m), wi.dot(m));
-        // Micro- and macro-surface must agree on the side of each direction.
-        if wo_m * wo.z <= 0.0 || wi_m * wi.z <= 0.0 {
-            return 0.0;
-        }
-        let dm_dwi = if reflect {
-            1.0 / (4.0 * wi_m)
-        } else {
-            let denom = wo_m + eta * wi_m;
-            eta * eta * wi_m / (denom * denom)
-        };
-        let wo_up = if wo.z > 0.0 { wo } else { -wo };
-        let f = fresnel_dielectric(wo_m, self.eta);
-        let p = self.distr.pdf_visible(wo_up, m) * if reflect { f } else { 1.0 - f } * dm_dwi.abs();
-        if p.is_finite() {
-            p
-        } else {
-            0.0
-        }
+        pdf_lanes(&self.distr, self.eta, wo, wi)
     }
 
     #[inline]
     pub fn sample(&self, wo: Vec3A, u1: f32, u2: Vec2, mode: TransportMode) -> Option<BsdfSample> {
-        if wo.z == 0.0 {
+        let s = sample_lanes(&self.distr, self.eta, wo, [u1, u2.x, u2.y], mode);
+        if !s.ok {
             return None;
         }
-        let wo_up = if wo.z > 0.0 { wo } else { -wo };
-        let m = self.distr.sample_visible(wo_up, u2);
-        let mut pdf = self.distr.pdf_visible(wo_up, m);
-        if pdf.is_nan() || pdf <= 0.0 {
-            return None;
-        }
-        let wo_m = wo.dot(m);
-        let (f, cos_t, eta_it, eta_ti) = fresnel_refraction(wo_m, self.eta);
-        let reflect = u1 <= f;
-        let (wi, mut weight, eta, dm_dwi) = if reflect {
-            let wi = reflect_about(wo, m);
-            pdf *= f;
-            (wi, 1.0, 1.0, 1.0 / (4.0 * wi.dot(m)))
-        } else {
-            // Refraction through m (Walter et al. 2007, eq. 40).
-            let wi = m * (wo_m * eta_ti + cos_t) - wo * eta_ti;
-            pdf *= 1.0 - f;
-            let scale = match mode {
-                TransportMode::Radiance => eta_ti * eta_ti,
-                TransportMode::Importance => 1.0,
-            };
-            let wi_m = wi.dot(m);
-            let denom = wo_m + eta_it * wi_m;
-            (wi, scale, eta_it, eta_it * eta_it * wi_m / (denom * denom))
-        };
-        // f·|cos θi|/pdf reduces to G1(wi, m) (times the radiance scale) for visible-normal
-        // sampling: D, G1(wo), F and the Jacobian cancel.
-        weight *= self.distr.g1(wi, m);
-        pdf *= dm_dwi.abs();
-        if weight.is_nan() || weight <= 0.0 || !pdf.is_finite() || pdf <= 0.0 {
-            return None;
-        }
-        let factor = if reflect {
+        let factor = if s.reflect {
             self.specular_reflectance
         } else {
             self.specular_transmittance
         };
         Some(BsdfSample {
-            wi,
-            weight: factor * weight,
-            pdf,
+            wi: s.wi,
+            weight: factor * s.weight,
+            pdf: s.pdf,
             specular: false,
-            eta,
+            eta: s.eta,
         })
+    }
+}
+
+/// f(wo, wi) of unit factors in lanes, of relative index `eta` (inside over outside), and
+/// the lanes where the pair reflects (whose factor is the reflectance; the others' the
+/// transmittance). Zero where either direction is in the plane or the value is not finite.
+#[inline(always)]
+pub fn eval_lanes<V, D>(distr: &D, eta: V::F, wo: V, wi: V, mode: TransportMode) -> (V::F, Mask<V>)
+where
+    V: Vector3,
+    D: Distribution<V>,
+{
+    let (zero, one) = (V::F::zero(), V::F::splat(1.0));
+    let mut ok = !wo.z().eq(zero) & !wi.z().eq(zero);
+    let (m, reflect, eta_p) = half_vector(wo, wi, eta);
+    if !V::F::any(ok) {
+        return (zero, reflect);
+    }
+    let d = distr.d(m);
+    ok = ok & !d.eq(zero);
+    if !V::F::any(ok) {
+        return (zero, reflect);
+    }
+    let (wo_m, wi_m) = (wo.dot(m), wi.dot(m));
+    let f = fresnel_dielectric_lanes(wo_m, eta);
+    let g = distr.g1(wo, m) * distr.g1(wi, m);
+    let r = f * d * g / (V::F::splat(4.0) * wo.z().abs() * wi.z().abs());
+    let scale = match mode {
+        TransportMode::Radiance => one / (eta_p * eta_p),
+        TransportMode::Importance => one,
+    };
+    let denom = wo_m + eta_p * wi_m;
+    let t = (scale * (one - f) * d * g * eta_p * eta_p * wo_m * wi_m
+        / (wo.z() * wi.z() * denom * denom))
+        .abs();
+    let v = V::F::select(reflect, r, t);
+    (V::F::select(ok & finite(v), v, zero), reflect)
+}
+
+/// The pdf of [`sample_lanes`] choosing `wi`, in lanes.
+#[inline(always)]
+pub fn pdf_lanes<V, D>(distr: &D, eta: V::F, wo: V, wi: V) -> V::F
+where
+    V: Vector3,
+    D: Distribution<V>,
+{
+    let (zero, one) = (V::F::zero(), V::F::splat(1.0));
+    let mut ok = !wo.z().eq(zero) & !wi.z().eq(zero);
+    if !V::F::any(ok) {
+        return zero;
+    }
+    let (m, reflect, eta_p) = half_vector(wo, wi, eta);
+    let (wo_m, wi_m) = (wo.dot(m), wi.dot(m));
+    // Micro- and macro-surface must agree on the side of each direction.
+    ok = ok & !(wo_m * wo.z()).le(zero) & !(wi_m * wi.z()).le(zero);
+    let denom = wo_m + eta_p * wi_m;
+    let dm_dwi = V::F::select(
+        reflect,
+        one / (V::F::splat(4.0) * wi_m),
+        eta_p * eta_p * wi_m / (denom * denom),
+    );
+    let wo_up = V::select(wo.z().gt(zero), wo, -wo);
+    let f = fresnel_dielectric_lanes(wo_m, eta);
+    let p = distr.pdf_visible(wo_up, m) * V::F::select(reflect, f, one - f) * dm_dwi.abs();
+    V::F::select(ok & finite(p), p, zero)
+}
+
+/// A sample of [`sample_lanes`]: the direction, the weight f·|cos θi|/pdf of unit factors,
+/// the pdf, the index crossed (1 where reflecting), the lanes that reflect and those with a
+/// sample.
+pub struct Sample<V: Vector3> {
+    pub wi: V,
+    pub weight: V::F,
+    pub pdf: V::F,
+    pub eta: V::F,
+    pub reflect: Mask<V>,
+    pub ok: Mask<V>,
+}
+
+/// A normal by the distribution of those visible from `wo` (turned to the upper side), then
+/// reflection through it with probability F, else refraction: `u` the lobe's number and
+/// the normal's two.
+#[inline(always)]
+pub fn sample_lanes<V, D>(
+    distr: &D,
+    eta: V::F,
+    wo: V,
+    [u1, ux, uy]: [V::F; 3],
+    mode: TransportMode,
+) -> Sample<V>
+where
+    V: Vector3,
+    D: Distribution<V>,
+{
+    let (zero, one) = (V::F::zero(), V::F::splat(1.0));
+    let mut ok = !wo.z().eq(zero);
+    let none = Sample {
+        wi: wo,
+        weight: zero,
+        pdf: zero,
+        eta: one,
+        reflect: ok,
+        ok: !ok & ok,
+    };
+    if !V::F::any(ok) {
+        return none;
+    }
+    let wo_up = V::select(wo.z().gt(zero), wo, -wo);
+    let m = distr.sample_visible(wo_up, ux, uy);
+    let pdf = distr.pdf_visible(wo_up, m);
+    ok = ok & pdf.gt(zero);
+    let wo_m = wo.dot(m);
+    let (f, cos_t, eta_it, eta_ti) = fresnel_refraction_lanes(wo_m, eta);
+    let reflect = u1.le(f);
+    let reflected = reflect_about_lanes(wo, m);
+    // Refraction through m (Walter et al. 2007, eq. 40).
+    let refracted = m.scale(wo_m * eta_ti + cos_t) - wo.scale(eta_ti);
+    let wi = V::select(reflect, reflected, refracted);
+    let scale = match mode {
+        TransportMode::Radiance => eta_ti * eta_ti,
+        TransportMode::Importance => one,
+    };
+    let wi_m = refracted.dot(m);
+    let denom = wo_m + eta_it * wi_m;
+    let dm_dwi = V::F::select(
+        reflect,
+        one / (V::F::splat(4.0) * reflected.dot(m)),
+        eta_it * eta_it * wi_m / (denom * denom),
+    );
+    // f·|cos θi|/pdf reduces to G1(wi, m) (times the radiance scale) for visible-normal
+    // sampling: D, G1(wo), F and the Jacobian cancel.
+    let weight = V::F::select(reflect, one, scale) * distr.g1(wi, m);
+    let pdf = pdf * V::F::select(reflect, f, one - f) * dm_dwi.abs();
+    // (NaN weights and pdfs fail the comparisons.)
+    let ok = ok & weight.gt(zero) & finite(pdf) & pdf.gt(zero);
+    Sample {
+        wi,
+        weight,
+        pdf,
+        eta: V::F::select(reflect, one, eta_it),
+        reflect,
+        ok,
     }
 }

@@ -3,9 +3,10 @@
 //! BSDFs of [`crate::material`] instanced for the lanes.
 
 use super::simd::{F, M, V3};
+use super::LaneMask;
 use crate::material::microfacet::Either;
 use crate::material::rough_conductor::RoughConductor;
-use crate::material::{dielectric, lambert};
+use crate::material::{dielectric, lambert, rough_dielectric, TransportMode};
 use crate::simd::{Float, Vector3};
 
 /// The lanes' BSDF samples (`Material::sample` in radiance mode).
@@ -20,8 +21,18 @@ pub struct Sample {
     pub eta: F,
 }
 
+/// The rough lanes of a vertex, where any lane has one: those of rough conductors (`metal`)
+/// and of rough dielectrics (`glass`, of relative index `eta`, unit factors), and the
+/// conductors, whose distribution serves both.
+pub struct Microfacets {
+    pub metal: M,
+    pub glass: M,
+    pub conductor: RoughConductor<Either<F>, V3>,
+    pub eta: F,
+}
+
 /// The BSDF samples of lanes with Lambertian (`lambert`), mirror (`mirror`), glass
-/// (`glass`) and rough conductor (`rough`, the BSDFs beside it where any lane has one) materials: `colour` the
+/// (`glass`) and rough (`rough`, where any lane is) materials: `colour` the
 /// albedo or reflectance, `eta` the glass's index, `oriented` and `side` what
 /// `Material::orient` gives (glass: every lane, side 1).
 #[allow(clippy::too_many_arguments)]
@@ -32,7 +43,7 @@ pub fn sample(
     colour: V3,
     eta: F,
     (lambert, mirror, glass): (M, M, M),
-    (rough, conductor): (M, Option<&RoughConductor<Either<F>, V3>>),
+    rough: Option<&Microfacets>,
     oriented: M,
     side: F,
 ) -> Sample {
@@ -81,13 +92,27 @@ pub fn sample(
         pdf,
         eta: F::select(glass & !reflects, etap, one),
     };
+    let Some(r) = rough else {
+        return s;
+    };
     // Rough conductors on the side wo is on, and back (`Material::sample`'s flip).
-    if let Some(conductor) = conductor {
-        let (r_wi, r_weight, r_pdf, r_ok) = conductor.sample_lanes(flip_z(wo, side), ux, uy);
-        s.ok |= rough & oriented & r_ok;
-        s.wi = V3::select(rough, flip_z(r_wi, side), s.wi);
-        s.weight = V3::select(rough, r_weight, s.weight);
-        s.pdf = F::select(rough, r_pdf, s.pdf);
+    if r.metal.any() {
+        let (wi, weight, pdf, ok) = r.conductor.sample_lanes(flip_z(wo, side), ux, uy);
+        s.ok |= r.metal & oriented & ok;
+        s.wi = V3::select(r.metal, flip_z(wi, side), s.wi);
+        s.weight = V3::select(r.metal, weight, s.weight);
+        s.pdf = F::select(r.metal, pdf, s.pdf);
+    }
+    // Rough dielectrics, from either side.
+    if r.glass.any() {
+        let distr = &r.conductor.distr;
+        let g = rough_dielectric::sample_lanes(distr, r.eta, wo, [u1, ux, uy], TransportMode::Radiance);
+        let w = g.weight;
+        s.ok |= r.glass & g.ok;
+        s.wi = V3::select(r.glass, g.wi, s.wi);
+        s.weight = V3::select(r.glass, V3 { x: w, y: w, z: w }, s.weight);
+        s.pdf = F::select(r.glass, g.pdf, s.pdf);
+        s.eta = F::select(r.glass, g.eta, s.eta);
     }
     s
 }

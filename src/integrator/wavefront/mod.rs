@@ -29,8 +29,9 @@
 //! Each lane computes exactly what `path::li` computes for its camera sample: the same
 //! numbers from the same sampler ([`rng`]), the same hits, and the same shading maths, which
 //! is written once over the lane traits of [`crate::simd`] (frames, warps, Fresnel,
-//! refraction, MIS, ray offsets, hit points, light samples, the Lambertian, glass and rough
-//! conductor BSDFs) and instanced here with sixteen lanes, there with one. A sample's value is therefore the same
+//! refraction, MIS, ray offsets, hit points, light samples, the Lambertian, glass, rough
+//! conductor and rough dielectric BSDFs) and instanced here with sixteen lanes, there with
+//! one. A sample's value is therefore the same
 //! bits whichever of the two renders it, and so is the image (the film's fixed-point sums do
 //! not depend on the order samples arrive in): on any CPU, any thread count, any split into
 //! passes or machines. `tests/wavefront.rs` compares the two on scenes that take every
@@ -38,12 +39,12 @@
 //! masks, the roulette).
 //!
 //! The scenes it takes ([`Wavefront::new`]): every material Lambertian (one- or two-sided),
-//! a mirror, smooth glass, a rough conductor (Beckmann or GGX, isotropic or not) or black,
-//! their colours constant or textured (looked up at each hit as `Scene::material_at` does,
-//! so not with brute force; a rough conductor's not), none with a normal or bump map; one
-//! light, a triangle or a parallelogram of constant radiance; a pinhole or perspective
-//! camera; the `path` integrator, any number of shadow rays (one only with AVX2 or with
-//! rough conductors), either sampler. The Cornell box, the TNCG15 room and the Cornell box with the
+//! a mirror, smooth glass, a rough conductor or rough glass (Beckmann or GGX, isotropic or
+//! not; glass of unit factors) or black, their colours constant or textured (looked up at
+//! each hit as `Scene::material_at` does, so not with brute force; a rough material's not),
+//! none with a normal or bump map; one light, a triangle or a parallelogram of constant
+//! radiance; a pinhole or perspective camera; the `path` integrator, any number of shadow
+//! rays (one only with AVX2 or with rough materials), either sampler. The Cornell box, the TNCG15 room and the Cornell box with the
 //! Stanford bunny are such scenes. Any other scene, and any CPU without AVX2, BMI1, BMI2 and
 //! POPCNT, renders with the stream ([`super::stream`]) or `path::li`.
 //!
@@ -113,9 +114,10 @@ const LAMBERT: u32 = 0;
 const MIRROR: u32 = 1;
 const GLASS: u32 = 2;
 const BLACK: u32 = 3;
-/// A rough conductor...
+/// A rough conductor, a rough dielectric...
 const ROUGH: u32 = 4;
-/// ...whether it is two-sided, whether it emits, and whether a rough conductor's microfacets
+const ROUGH_GLASS: u32 = 5;
+/// ...whether it is two-sided, whether it emits, and whether a rough material's microfacets
 /// are Beckmann's (else GGX).
 const TWO_SIDED: u32 = 8;
 const EMITTER: u32 = 16;
@@ -256,9 +258,9 @@ impl RoughTables {
 }
 
 impl Shading {
-    /// The material as the lanes shade it, if they do: a Lambertian, a mirror, smooth glass
-    /// of unit factors, a rough conductor, or black; colours constant or textured (not a
-    /// rough conductor's); no normal or bump map.
+    /// The material as the lanes shade it, if they do: a Lambertian, a mirror, smooth or
+    /// rough glass of unit factors, a rough conductor, or black; colours constant or textured
+    /// (not a rough material's); no normal or bump map.
     fn of(material: &crate::material::Material) -> Option<Shading> {
         if material.perturbs() || material.mix.is_some() {
             return None;
@@ -267,20 +269,30 @@ impl Shading {
         let (kind, colour, eta) = Self::bsdf(&material.bsdf)?;
         // (Glass's textured factors would not be the unit ones the lanes assume, and a
         // rough conductor's textured roughness is not looked up.)
-        if textured && (kind == GLASS || kind == ROUGH) {
+        if textured && (kind == GLASS || kind == ROUGH || kind == ROUGH_GLASS) {
             return None;
         }
-        let rough = match &material.bsdf {
-            Bsdf::RoughConductor(b) => Rough {
-                alpha: [b.distr.alpha_u, b.distr.alpha_v],
-                eta: b.eta.into(),
-                k: b.k.into(),
-            },
-            _ => Rough::NONE,
+        let (rough, distr) = match &material.bsdf {
+            Bsdf::RoughConductor(b) => (
+                Rough {
+                    alpha: [b.distr.alpha_u, b.distr.alpha_v],
+                    eta: b.eta.into(),
+                    k: b.k.into(),
+                },
+                Some(b.distr),
+            ),
+            Bsdf::RoughDielectric(b) => (
+                Rough {
+                    alpha: [b.distr.alpha_u, b.distr.alpha_v],
+                    ..Rough::NONE
+                },
+                Some(b.distr),
+            ),
+            _ => (Rough::NONE, None),
         };
         let two_sided = if material.two_sided { TWO_SIDED } else { 0 };
-        let beckmann = match &material.bsdf {
-            Bsdf::RoughConductor(b) if b.distr.kind == MicrofacetType::Beckmann => BECKMANN,
+        let beckmann = match distr {
+            Some(d) if d.kind == MicrofacetType::Beckmann => BECKMANN,
             _ => 0,
         };
         Some(Shading {
@@ -300,6 +312,13 @@ impl Shading {
             Bsdf::Lambert(b) => (LAMBERT, b.albedo, 1.0),
             Bsdf::Mirror(b) => (MIRROR, b.reflectance, 1.0),
             Bsdf::RoughConductor(b) => (ROUGH, b.specular_reflectance, 1.0),
+            // (Rough glass of factors other than 1 takes the scalar path.)
+            Bsdf::RoughDielectric(b)
+                if b.specular_reflectance == crate::Color::ONE
+                    && b.specular_transmittance == crate::Color::ONE =>
+            {
+                (ROUGH_GLASS, crate::Color::ONE, b.eta)
+            }
             Bsdf::Dielectric(b) => {
                 // (Glass with factors other than 1 takes the scalar path.)
                 if b.specular_reflectance != crate::Color::ONE
@@ -400,7 +419,9 @@ impl<'a> Wavefront<'a> {
             .map(Shading::of)
             .collect::<Option<Vec<_>>>()?;
         // (Several light samples a vertex, the planar batch's, are Lambertian only.)
-        let has_rough = materials.iter().any(|m| m.flags & KIND == ROUGH);
+        let has_rough = materials
+            .iter()
+            .any(|m| matches!(m.flags & KIND, ROUGH | ROUGH_GLASS));
         if has_rough && p.shadow_rays > 1 {
             return None;
         }

@@ -4,7 +4,7 @@
 //! (`nee::planar::planar::<true>`, Lambertian vertices), the samples computed sixteen lanes
 //! at a time and each lane's shadow rays traced as its own packets.
 
-use super::bsdf::flip_z;
+use super::bsdf::{flip_z, Microfacets};
 use super::simd::{F, M, V3};
 use super::{Bits, LaneMask, Wavefront};
 use crate::accel::{RayPacket, PACKET};
@@ -14,8 +14,7 @@ use crate::integrator::nee::{lambert_weight, shadow_dir, wrap};
 use crate::integrator::RayStats;
 use crate::light::{planar_point, towards};
 use crate::material::lambert;
-use crate::material::microfacet::Either;
-use crate::material::rough_conductor::RoughConductor;
+use crate::material::{rough_dielectric, TransportMode};
 use crate::material::sampling::cosine_hemisphere_pdf_lanes;
 use crate::material::sampling::power_heuristic_lanes;
 use crate::simd::{Float, Vector3};
@@ -23,8 +22,8 @@ use glam::Vec3A;
 use std::f32::consts::{FRAC_1_PI, PI};
 
 /// A vertex of each lane: the point, its error bound and geometric normal, the frame, the
-/// direction to the last vertex (local), its material's colour, the lanes whose material is
-/// a rough conductor and its BSDF, and the side of the surface the path is on
+/// direction to the last vertex (local), its material's colour, its rough materials (where
+/// a lane has one), and the side of the surface the path is on
 /// (`Material::orient`: `oriented` lanes, `side` ±1).
 pub struct Vertex<'a> {
     pub p: V3,
@@ -33,7 +32,7 @@ pub struct Vertex<'a> {
     pub frame: Frame<V3>,
     pub wo: V3,
     pub albedo: V3,
-    pub rough: (M, Option<&'a RoughConductor<Either<F>, V3>>),
+    pub rough: Option<&'a Microfacets>,
     pub oriented: M,
     pub side: F,
 }
@@ -60,15 +59,25 @@ impl Wavefront<'_> {
         let ln = V3::splat(lt.normal);
         let (dl, dist2, wi, cos_l, pdf) = towards(v.p, pl, ln, one, F::splat(lt.area));
         // `Material::eval_pdf` on the side the path is on: `Lambert::eval` and `pdf`, or the
-        // rough conductor's.
+        // rough conductor's; the rough dielectric's from either side.
         let wil = v.frame.to_local(wi);
         let wz = wil.z * v.side;
         let mut f = lambert::eval(v.albedo, wz);
         let mut bsdf_pdf = cosine_hemisphere_pdf_lanes(wz);
-        if let (rough, Some(conductor)) = v.rough {
-            let (wo, wi) = (flip_z(v.wo, v.side), flip_z(wil, v.side));
-            f = V3::select(rough, conductor.eval_lanes(wo, wi), f);
-            bsdf_pdf = F::select(rough, conductor.pdf_lanes(wo, wi), bsdf_pdf);
+        if let Some(r) = v.rough {
+            if r.metal.any() {
+                let (wo, wi) = (flip_z(v.wo, v.side), flip_z(wil, v.side));
+                f = V3::select(r.metal, r.conductor.eval_lanes(wo, wi), f);
+                bsdf_pdf = F::select(r.metal, r.conductor.pdf_lanes(wo, wi), bsdf_pdf);
+            }
+            if r.glass.any() {
+                let distr = &r.conductor.distr;
+                let mode = TransportMode::Radiance;
+                let (g, _) = rough_dielectric::eval_lanes(distr, r.eta, v.wo, wil, mode);
+                let pdf = rough_dielectric::pdf_lanes(distr, r.eta, v.wo, wil);
+                f = V3::select(r.glass, V3 { x: g, y: g, z: g }, f);
+                bsdf_pdf = F::select(r.glass, pdf, bsdf_pdf);
+            }
         }
         let f = V3::select(v.oriented, f, V3::zero());
         let bsdf_pdf = F::select(v.oriented, bsdf_pdf, zero);

@@ -8,7 +8,8 @@ use super::rng::LaneSampler;
 use super::simd::{F, M, U, V3};
 use super::{trace, Bits, LaneMask, Lanes, Trace, Wavefront, GROUPS};
 use crate::scene::Interaction;
-use super::{BECKMANN, BLACK, EMITTER, GLASS, KIND, LAMBERT, MIRROR, ROUGH, TWO_SIDED};
+use super::bsdf::Microfacets;
+use super::{BECKMANN, BLACK, EMITTER, GLASS, KIND, LAMBERT, MIRROR, ROUGH, ROUGH_GLASS, TWO_SIDED};
 use crate::material::microfacet::Either;
 use crate::material::rough_conductor::RoughConductor;
 use crate::film::PixelSums;
@@ -60,9 +61,9 @@ impl Wavefront<'_> {
     }
 
     /// The rough conductors at the lanes' hits `sf` (`hits` with [`Trace::Scene`]), read
-    /// only where a lane has one: by primitive from the tables, or from each hit's
-    /// material. A lane's reflectance is its colour; lanes without one hold values no lane
-    /// reads.
+    /// only where a lane has one or a rough dielectric (whose microfacets they hold too): by
+    /// primitive from the tables, or from each hit's material. A lane's reflectance is its
+    /// colour; lanes without one hold values no lane reads.
     #[inline(always)]
     fn conductor(
         &self,
@@ -239,21 +240,29 @@ impl Wavefront<'_> {
         let frame = Frame::from_normal(sf.ns);
         let wo = frame.to_local(nd);
         let (lambert, mirror, glass) = (kind(LAMBERT), kind(MIRROR), kind(GLASS));
-        let rough = kind(ROUGH);
-        let conductor = if rough.any() {
-            Some(self.conductor(&sf, &st.hits))
+        let (metal, frosted) = (kind(ROUGH), kind(ROUGH_GLASS));
+        let rough = if (metal | frosted).any() {
+            Some(Microfacets {
+                metal,
+                glass: frosted,
+                conductor: self.conductor(&sf, &st.hits),
+                eta: sf.eta,
+            })
         } else {
             None
         };
+        // (Both glasses are seen from either side.)
+        let clear = glass | frosted;
         let front = wo.z.gt(zero);
-        let oriented = glass | front | (wo.z.lt(zero) & flags.any(TWO_SIDED));
-        let side = F::select(glass | front, one, F::splat(-1.0));
+        let oriented = clear | front | (wo.z.lt(zero) & flags.any(TWO_SIDED));
+        let side = F::select(clear | front, one, F::splat(-1.0));
         let colour = sf.colour;
 
         // Next-event estimation at the non-specular (Lambertian and rough) vertices: with one
         // light sample, its shadow ray and the two values `l += β·lit` can add (β times the
         // sample's contribution, or β·0 if it is blocked) wait for `shadows`.
-        let nee = cont & (lambert | rough);
+        let smooth_lobes = lambert | metal | frosted;
+        let nee = cont & smooth_lobes;
         st.shadow.lanes = 0;
         st.shadow.nee = nee.bits();
         if nee.any() {
@@ -265,7 +274,7 @@ impl Wavefront<'_> {
                 frame,
                 wo,
                 albedo: colour,
-                rough: (rough, conductor.as_ref()),
+                rough: rough.as_ref(),
                 oriented,
                 side,
             };
@@ -294,7 +303,7 @@ impl Wavefront<'_> {
             colour,
             eta,
             (lambert, mirror, glass),
-            (rough, conductor.as_ref()),
+            rough.as_ref(),
             oriented,
             side,
         );
@@ -321,7 +330,7 @@ impl Wavefront<'_> {
         bs.pdf.store(&mut st.prev_pdf);
         depth.store(&mut st.depth);
         // After a specular bounce the next emitter hit takes no MIS weight.
-        st.has_prev = (alive & (lambert | rough)).bits();
+        st.has_prev = (alive & smooth_lobes).bits();
         st.active = alive.bits();
         st.done = done.bits();
     }
