@@ -247,12 +247,9 @@ impl<V: Vector3> Distribution<V> for Ggx<V::F> {
 
     #[inline(always)]
     fn g1(&self, v: V, m: V) -> V::F {
-        let (zero, one) = (V::F::zero(), V::F::splat(1.0));
+        let one = V::F::splat(1.0);
         let t2 = tan_alpha2(self.alpha_u, self.alpha_v, v);
-        let g = V::F::splat(2.0) / (one + (one + t2).sqrt());
-        // Zero where v and the macro-normal disagree about the side of m.
-        let g = V::F::select(t2.eq(zero), one, g);
-        V::F::select((v.dot(m) * v.z()).le(zero), zero, g)
+        visible(v, m, t2, V::F::splat(2.0) / (one + (one + t2).sqrt()))
     }
 
     /// Heitz 2018, listing 1, with the disk point's first coordinate along −T1 and T1 = y at
@@ -264,7 +261,7 @@ impl<V: Vector3> Distribution<V> for Ggx<V::F> {
         let (au, av) = (self.alpha_u, self.alpha_v);
         let (zero, one, k) = (V::F::zero(), V::F::splat(1.0), V::F::splat);
         // Stretch wo to the configuration with α = 1 (the hemisphere).
-        let vh = V::new(au * wo.x(), av * wo.y(), wo.z()).normalize();
+        let vh = stretch(au, av, wo);
         // An orthonormal basis around vh (T1 is perpendicular to the plane of incidence).
         let len2 = vh.x() * vh.x() + vh.y() * vh.y();
         let t1 = V::select(
@@ -308,7 +305,7 @@ impl<V: Vector3> Distribution<V> for Beckmann<V::F> {
     /// Walter's rational approximation of 1/(1 + Λ) (1 for a ≥ 1.6).
     #[inline(always)]
     fn g1(&self, v: V, m: V) -> V::F {
-        let (zero, one, k) = (V::F::zero(), V::F::splat(1.0), V::F::splat);
+        let (one, k) = (V::F::splat(1.0), V::F::splat);
         let t2 = tan_alpha2(self.alpha_u, self.alpha_v, v);
         let a = (one / t2).sqrt();
         // (The rational function only where a lane needs it.)
@@ -318,8 +315,7 @@ impl<V: Vector3> Distribution<V> for Beckmann<V::F> {
             let r = (k(3.535) * a + k(2.181) * a * a) / (one + k(2.276) * a + k(2.577) * a * a);
             g = V::F::select(near, r, one);
         }
-        let g = V::F::select(t2.eq(zero), one, g);
-        V::F::select((v.dot(m) * v.z()).le(zero), zero, g)
+        visible(v, m, t2, g)
     }
 
     /// Heitz and d'Eon 2014 (stretch, sample slopes for α = 1, rotate, unstretch) with
@@ -328,7 +324,7 @@ impl<V: Vector3> Distribution<V> for Beckmann<V::F> {
     fn sample_visible(&self, wo: V, ux: V::F, uy: V::F) -> V {
         let (au, av) = (self.alpha_u, self.alpha_v);
         let (zero, one, k) = (V::F::zero(), V::F::splat(1.0), V::F::splat);
-        let w = V::new(au * wo.x(), av * wo.y(), wo.z()).normalize();
+        let w = stretch(au, av, wo);
         // The azimuth of the stretched direction (Mitsuba's `Frame3f::sincos_phi`).
         let s2 = w.x() * w.x() + w.y() * w.y();
         let along = s2.le(k(4.0 * f32::EPSILON / 2.0));
@@ -403,6 +399,21 @@ impl<V: Vector3> Distribution<V> for Either<V::F> {
             ),
         }
     }
+}
+
+/// G1 where v sees the front of m (v and the macro-normal agree about m's side), of value
+/// `g` but 1 at normal incidence (t2, (α tan θ)², zero); zero elsewhere.
+#[inline(always)]
+fn visible<V: Vector3>(v: V, m: V, t2: V::F, g: V::F) -> V::F {
+    let (zero, one) = (V::F::zero(), V::F::splat(1.0));
+    let g = V::F::select(t2.eq(zero), one, g);
+    V::F::select((v.dot(m) * v.z()).le(zero), zero, g)
+}
+
+/// `wo` stretched to the configuration with α = 1, unit length.
+#[inline(always)]
+fn stretch<V: Vector3>(alpha_u: V::F, alpha_v: V::F, wo: V) -> V {
+    V::new(alpha_u * wo.x(), alpha_v * wo.y(), wo.z()).normalize()
 }
 
 /// D where D·cos θm > 1e-20, else zero (Mitsuba's flush; NaN, m in the plane, fails the
