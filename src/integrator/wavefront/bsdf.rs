@@ -1,6 +1,6 @@
 //! BSDF sampling, lane by lane: `Material::orient` and `Material::sample` for the
-//! Lambertian, mirror, glass and rough conductor BSDFs, over the warps, Fresnel terms and
-//! BSDFs of [`crate::material`] instanced for the lanes.
+//! Lambertian, mirror, glass, rough conductor and rough dielectric BSDFs, over the warps,
+//! Fresnel terms and BSDFs of [`crate::material`] instanced for the lanes.
 
 use super::simd::{F, M, V3};
 use super::LaneMask;

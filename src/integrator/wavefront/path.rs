@@ -134,7 +134,6 @@ impl Wavefront<'_> {
                 (ng[a][l], ns[a][l]) = (si.ng[a], si.ns[a]);
                 colour[a][l] = c[a];
             }
-
             let emits = si.light != crate::scene::NO_LIGHT;
             flags[l] = sh.flags | if emits { EMITTER } else { 0 };
             eta[l] = sh.eta;
@@ -261,8 +260,8 @@ impl Wavefront<'_> {
         // Next-event estimation at the non-specular (Lambertian and rough) vertices: with one
         // light sample, its shadow ray and the two values `l += β·lit` can add (β times the
         // sample's contribution, or β·0 if it is blocked) wait for `shadows`.
-        let smooth_lobes = lambert | metal | frosted;
-        let nee = cont & smooth_lobes;
+        let non_delta = lambert | metal | frosted;
+        let nee = cont & non_delta;
         st.shadow.lanes = 0;
         st.shadow.nee = nee.bits();
         if nee.any() {
@@ -330,7 +329,7 @@ impl Wavefront<'_> {
         bs.pdf.store(&mut st.prev_pdf);
         depth.store(&mut st.depth);
         // After a specular bounce the next emitter hit takes no MIS weight.
-        st.has_prev = (alive & smooth_lobes).bits();
+        st.has_prev = (alive & non_delta).bits();
         st.active = alive.bits();
         st.done = done.bits();
     }
