@@ -719,6 +719,99 @@ fn rough_materials_both_ways() {
     }
 }
 
+/// [`SPECULAR`] with its mirrors and glass in materials the lanes shade through each lane's
+/// `Material`: both `mirror1` quads (one facing away) a one-sided Beckmann rough plastic,
+/// `mirror2` a two-sided plastic, the clear glass ball a principled BSDF with transmission,
+/// clearcoat and sheen, the dense one a thin dielectric; the walls stay Lambertian, in the
+/// lanes' own registers.
+fn general_materials() -> String {
+    let swap = |text: String, from: &str, to: &str| {
+        assert!(text.contains(from), "SPECULAR holds {from}");
+        text.replace(from, to)
+    };
+    let text = swap(
+        SPECULAR.to_string(),
+        "[material.mirror1]\ntype = \"mirror\"\nreflectance = [0.9, 0.8, 0.7]",
+        "[material.mirror1]\ntype = \"roughplastic\"\nalbedo = [0.7, 0.3, 0.2]\nalpha = 0.2\ndistribution = \"beckmann\"",
+    );
+    let text = swap(
+        text,
+        "[material.mirror2]\ntype = \"mirror\"\nreflectance = [0.6, 0.9, 0.9]",
+        "[material.mirror2]\ntype = \"plastic\"\nalbedo = [0.2, 0.5, 0.7]\ntwo_sided = true",
+    );
+    let text = swap(
+        text,
+        "[material.glass]\ntype = \"dielectric\"\nior = 1.5",
+        "[material.glass]\ntype = \"principled\"\nbase_color = [0.8, 0.7, 0.6]\nroughness = 0.3\nmetallic = 0.2\nspec_trans = 0.6\nclearcoat = 0.5\nsheen = 0.3",
+    );
+    swap(
+        text,
+        "[material.dense]\ntype = \"dielectric\"\nior = 2.4\next_ior = 1.2",
+        "[material.dense]\ntype = \"thindielectric\"\nior = 1.6",
+    )
+}
+
+/// Materials that the lanes shade by calling each lane's `Material` (plastics, principled,
+/// a thin dielectric; through the scene also a blend of Oren–Nayar and a smooth conductor,
+/// textured roughness and a textured plastic), among Lambertian walls in the lanes' own
+/// registers, by brute force and through the scene's queries, with hidden emitters and
+/// both roulettes: the same film as one path at a time.
+#[test]
+fn general_materials_both_ways() {
+    if !cpu_runs_it() {
+        return;
+    }
+    use mcrt::integrator::RussianRoulette;
+    let through = general_materials()
+        .replace(
+            "[material.dense]\ntype = \"thindielectric\"\nior = 1.6",
+            "[material.clay]\ntype = \"oren_nayar\"\nalbedo = [0.6, 0.5, 0.4]\nsigma = 25\n\
+             [material.gold]\ntype = \"conductor\"\nmaterial = \"Au\"\n\
+             [material.dense]\ntype = \"blend\"\nmaterials = [\"clay\", \"gold\"]\nweight = 0.4\n\
+             [texture.checks]\ntype = \"checkerboard\"\ncolor0 = [0.05, 0.05, 0.05]\ncolor1 = [0.4, 0.4, 0.4]\nuv_scale = [4, 4]\n\
+             [material.brushed]\ntype = \"roughconductor\"\nmaterial = \"Cu\"\nalpha = \"checks\"\n\
+             [material.tiles]\ntype = \"plastic\"\nalbedo = \"checks\"",
+        )
+        .replace(
+            "[[shape]]\ntype = \"quad\"\nmaterial = \"white\"\nvertices = [[-2, 0, 3], [-2, 0, -2]",
+            "[[shape]]\ntype = \"quad\"\nmaterial = \"tiles\"\nvertices = [[-2, 0, 3], [-2, 0, -2]",
+        )
+        + &smooth_ball([0.0, 1.7, -1.2], 0.3, "brushed", 6, 10);
+    assert!(through.contains("\"tiles\"\nvertices") && through.contains("\"blend\""));
+    for (k, (text, brute, hide, rr)) in [
+        (general_materials(), true, false, None),
+        (general_materials(), true, true, Some(0.6)),
+        (through.clone(), false, false, None),
+        (through, false, true, Some(0.7)),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let scene = scene_from(&hiding_emitters(&text, hide));
+        let mut s = settings(
+            &scene,
+            FileSettings {
+                width: Some(39),
+                height: Some(31),
+                spp: Some(4),
+                seed: Some(90 + k as u64),
+                ..Default::default()
+            },
+        );
+        if let Some(q) = rr {
+            s.params.rr = RussianRoulette::Fixed(q);
+        }
+        let w = Wavefront::new(&scene, &s);
+        assert!(w.is_some_and(|w| w.is_brute_force() == brute), "case {k}");
+        let what = format!("general materials, brute force {brute}, hide {hide}, {rr:?}");
+        let (film, _) = same_both_ways(scene, &s, &what);
+        assert!(
+            film.sum_f64().iter().flatten().sum::<f64>() > 0.0,
+            "{what}: lit"
+        );
+    }
+}
+
 /// A sphere of radius `r` at `c` as a mesh of `2·rings·segments` triangles with smooth
 /// vertex normals (the sphere's), in `material`.
 fn smooth_ball(c: [f32; 3], r: f32, material: &str, rings: usize, segments: usize) -> String {
@@ -874,11 +967,12 @@ fn traced_through_the_scene_both_ways() {
 }
 
 /// An opacity mask (Mitsuba's `mask` with a bitmap opacity of 1, 0.5 and 0) in front of the
-/// light, which the scene's queries see through for camera and shadow rays alike: the
-/// feature scene `maps-mask.xml` without its normal and bump maps, second light and
-/// environment, which the lanes do not take.
+/// light, which the scene's queries see through for camera and shadow rays alike, and a
+/// normal-mapped rectangle and a bump-mapped sphere (whose `Material`s the lanes call): the
+/// feature scene `maps-mask.xml` without its second light and environment, which the lanes
+/// do not take.
 #[test]
-fn masks_traced_through_the_scene_both_ways() {
+fn masks_and_maps_traced_through_the_scene_both_ways() {
     if !cpu_runs_it() {
         return;
     }
@@ -894,23 +988,23 @@ fn masks_traced_through_the_scene_both_ways() {
     let shape = "<shape type=\"rectangle\">\n        <transform name=\"to_world\">";
     cut(
         &mut xml,
-        &format!("{shape}<scale x=\"0.6\" y=\"0.6\"/><rotate y=\"1\" angle=\"30\"/>"),
-        "</shape>",
-    );
-    cut(&mut xml, "<shape type=\"sphere\">", "</shape>");
-    cut(
-        &mut xml,
         &format!("{shape}<scale x=\"1.2\" y=\"0.8\"/>"),
         "</shape>",
     );
     cut(&mut xml, "<emitter type=\"constant\">", "</emitter>");
-    let leaf = dir.join("maps-leaf.png");
-    let xml = xml.replace("\"maps-leaf.png\"", &format!("\"{}\"", leaf.display()));
+    for png in ["maps-leaf.png", "maps-normal.png", "maps-height.png"] {
+        xml = xml.replace(
+            &format!("\"{png}\""),
+            &format!("\"{}\"", dir.join(png).display()),
+        );
+    }
     let path = std::env::temp_dir().join(format!("mcrt-wavefront-mask-{}.xml", std::process::id()));
     std::fs::write(&path, xml).unwrap();
     let scene = Scene::build(mcrt::load_scene(&path).unwrap());
     std::fs::remove_file(&path).unwrap();
     assert!(scene.materials.iter().any(|m| m.opacity.is_some()));
+    assert!(scene.materials.iter().any(|m| m.normal_map.is_some()));
+    assert!(scene.materials.iter().any(|m| m.bump.is_some()));
     let s = settings(
         &scene,
         FileSettings {
@@ -922,7 +1016,7 @@ fn masks_traced_through_the_scene_both_ways() {
     );
     let w = Wavefront::new(&scene, &s);
     assert!(w.is_some_and(|w| !w.is_brute_force()), "the masked scene");
-    same_both_ways(scene, &s, "an opacity mask");
+    same_both_ways(scene, &s, "an opacity mask, normal and bump maps");
 }
 
 /// Scenes and settings the wavefront does not take render one path at a time.
@@ -957,7 +1051,7 @@ fn declines_what_it_does_not_do() {
         let s = settings(&scene, FileSettings::default());
         assert!(Wavefront::new(&scene, &s).is_none(), "{what}");
     };
-    // A second light, a sphere light, a metal, a texture, vertex normals.
+    // A second light, a sphere light, a texture, vertex normals.
     declined(
         "two lights",
         &(OPEN.to_string()
@@ -975,30 +1069,21 @@ vertices = [[2, 0.1, 0], [2, 0.1, 1], [2, 1, 0]]
             "type = \"sphere\"\nemission = [6, 6, 6]\ncenter = [0, 1.2, 0]\nradius = 0.2",
         ),
     );
-    // Rough conductors of textured roughness, and with several shadow rays a vertex (the
-    // batch is Lambertian).
-    declined(
-        "textured roughness",
-        &rough_materials().replace(
-            "[material.mirror2]",
-            "[texture.checks]\ntype = \"checkerboard\"\ncolor0 = [0.1, 0.1, 0.1]\ncolor1 = [0.3, 0.3, 0.3]\n[material.mirror2]",
-        ).replace("alpha = 0.25", "alpha = \"checks\""),
-    );
-    let scene = scene_from(&rough_materials());
-    let mut s = settings(&scene, FileSettings::default());
-    assert!(Wavefront::new(&scene, &s).is_some(), "rough conductors");
-    s.params.shadow_rays = 2;
-    assert!(
-        Wavefront::new(&scene, &s).is_none(),
-        "rough conductors, two shadow rays"
-    );
-    declined(
-        "a metal",
-        &OPEN.replace(
-            "type = \"lambert\"\nalbedo = [0.9, 0.2, 0.2]",
-            "type = \"conductor\"\nmaterial = \"Au\"",
-        ),
-    );
+    // Rough and general materials with several shadow rays a vertex (the batch is
+    // Lambertian).
+    for (what, text) in [
+        ("rough conductors", rough_materials()),
+        ("general materials", general_materials()),
+    ] {
+        let scene = scene_from(&text);
+        let mut s = settings(&scene, FileSettings::default());
+        assert!(Wavefront::new(&scene, &s).is_some(), "{what}");
+        s.params.shadow_rays = 2;
+        assert!(
+            Wavefront::new(&scene, &s).is_none(),
+            "{what}, two shadow rays"
+        );
+    }
     through_scene(
         "a texture",
         &scene_from(&OPEN.replace(

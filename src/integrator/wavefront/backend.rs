@@ -6,6 +6,8 @@ use super::*;
 
 #[path = "bsdf.rs"]
 mod bsdf;
+#[path = "general.rs"]
+mod general;
 #[path = "lanes.rs"]
 mod lanes;
 #[path = "nee.rs"]

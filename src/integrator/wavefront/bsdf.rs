@@ -2,6 +2,7 @@
 //! Lambertian, mirror, glass, rough conductor and rough dielectric BSDFs, over the warps,
 //! Fresnel terms and BSDFs of [`crate::material`] instanced for the lanes.
 
+use super::general::General;
 use super::simd::{F, M, V3};
 use super::LaneMask;
 use crate::material::microfacet::Either;
@@ -19,6 +20,8 @@ pub struct Sample {
     pub weight: V3,
     pub pdf: F,
     pub eta: F,
+    /// Lanes whose sample is not a delta lobe's (MIS weighs the emitter it finds).
+    pub glossy: M,
 }
 
 /// The rough lanes of a vertex, where any lane has one: those of rough conductors (`metal`)
@@ -44,6 +47,7 @@ pub fn sample(
     eta: F,
     (lambert, mirror, glass): (M, M, M),
     rough: Option<&Microfacets>,
+    general: Option<&General>,
     oriented: M,
     side: F,
 ) -> Sample {
@@ -91,10 +95,21 @@ pub fn sample(
         weight,
         pdf,
         eta: F::select(glass & !reflects, etap, one),
+        glossy: lambert,
     };
+    if let Some(g) = general {
+        let gs = g.sample(wo, [ux, uy, u1]);
+        s.ok |= gs.ok;
+        s.wi = V3::select(g.lanes, gs.wi, s.wi);
+        s.weight = V3::select(g.lanes, gs.weight, s.weight);
+        s.pdf = F::select(g.lanes, gs.pdf, s.pdf);
+        s.eta = F::select(g.lanes, gs.eta, s.eta);
+        s.glossy |= gs.glossy;
+    }
     let Some(r) = rough else {
         return s;
     };
+    s.glossy |= r.metal | r.glass;
     // Rough conductors on the side wo is on, and back (`Material::sample`'s flip).
     if r.metal.any() {
         let (wi, weight, pdf, ok) = r.conductor.sample_lanes(flip_z(wo, side), ux, uy);

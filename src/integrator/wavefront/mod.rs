@@ -31,22 +31,28 @@
 //! is written once over the lane traits of [`crate::simd`] (frames, warps, Fresnel,
 //! refraction, MIS, ray offsets, hit points, light samples, the Lambertian, glass, rough
 //! conductor and rough dielectric BSDFs) and instanced here with sixteen lanes, there with
-//! one. A sample's value is therefore the same
+//! one, or is the path tracer's own `Material` called a lane at a time ([`general`]). A
+//! sample's value is therefore the same
 //! bits whichever of the two renders it, and so is the image (the film's fixed-point sums do
 //! not depend on the order samples arrive in): on any CPU, any thread count, any split into
 //! passes or machines. `tests/wavefront.rs` compares the two on scenes that take every
 //! branch (what is still the lanes' own: the brute-force traversal, the material dispatch by
 //! masks, the roulette).
 //!
-//! The scenes it takes ([`Wavefront::new`]): every material Lambertian (one- or two-sided),
-//! a mirror, smooth glass, a rough conductor or rough glass (Beckmann or GGX, isotropic or
-//! not; glass of unit factors) or black, their colours constant or textured (looked up at
-//! each hit as `Scene::material_at` does, so not with brute force; a rough material's not),
-//! none with a normal or bump map; one light, a triangle or a parallelogram of constant
-//! radiance; a pinhole or perspective camera; the `path` integrator, any number of shadow
-//! rays (one only with AVX2 or with rough materials), either sampler. The Cornell box, the TNCG15 room and the Cornell box with the
-//! Stanford bunny are such scenes. Any other scene, and any CPU without AVX2, BMI1, BMI2 and
-//! POPCNT, renders with the stream ([`super::stream`]) or `path::li`.
+//! The scenes it takes ([`Wavefront::new`]): any material; one light, a triangle or a
+//! parallelogram of constant radiance; a pinhole or perspective camera; the `path`
+//! integrator, any number of shadow rays (one only with AVX2, or where a material is not
+//! Lambertian, mirror or smooth glass), either sampler. The lanes shade in their registers
+//! the Lambertian, mirror, smooth glass, rough conductor and rough glass (Beckmann or GGX,
+//! isotropic or not; glass of unit factors) and black materials, their colours constant or
+//! textured (looked up at each hit as `Scene::material_at` does, so not with brute force; a
+//! rough material's not), with no normal or bump map; every other material (`GENERAL`: the
+//! plastics, principled, Oren–Nayar, smooth conductors, blends, maps, textured roughness)
+//! by calling each lane's `Material` ([`general`]), which brute force takes where it is
+//! the same at every hit. The Cornell box, the TNCG15 room, the Cornell box with the
+//! Stanford bunny and the Cornell box in five BSDFs of the benchmark are such scenes. Any
+//! other scene, and any CPU without AVX2, BMI1, BMI2 and POPCNT, renders with the stream
+//! ([`super::stream`]) or `path::li`.
 //!
 //! The lanes' code is written once over a small SIMD type of sixteen lanes and compiled
 //! twice ([`Backend`]): in one AVX-512 register ([`avx512`]) and in two AVX2 registers
@@ -114,9 +120,11 @@ const LAMBERT: u32 = 0;
 const MIRROR: u32 = 1;
 const GLASS: u32 = 2;
 const BLACK: u32 = 3;
-/// A rough conductor, a rough dielectric...
+/// A rough conductor, a rough dielectric, any other material (its `Material` called a lane
+/// at a time: [`general`])...
 const ROUGH: u32 = 4;
 const ROUGH_GLASS: u32 = 5;
+const GENERAL: u32 = 6;
 /// ...whether it is two-sided, whether it emits, and whether a rough material's microfacets
 /// are Beckmann's (else GGX).
 const TWO_SIDED: u32 = 8;
@@ -148,6 +156,9 @@ pub struct Wavefront<'a> {
     flags: [u32; 64],
     /// A rough conductor's roughness and complex index of refraction.
     rough: RoughTables,
+    /// Each `GENERAL` material as every hit sees it, where that is the same at every hit
+    /// (no texture, blend, normal or bump map), by material index.
+    resolved: Vec<Option<crate::material::Material>>,
     light: Light,
     max_depth: u32,
     rr: RussianRoulette,
@@ -258,19 +269,27 @@ impl RoughTables {
 }
 
 impl Shading {
-    /// The material as the lanes shade it, if they do: a Lambertian, a mirror, smooth or
-    /// rough glass of unit factors, a rough conductor, or black; colours constant or textured
-    /// (not a rough material's); no normal or bump map.
-    fn of(material: &crate::material::Material) -> Option<Shading> {
-        if material.perturbs() || material.mix.is_some() {
-            return None;
-        }
+    /// The material as the lanes shade it: in their registers a Lambertian, a mirror, smooth
+    /// or rough glass of unit factors, a rough conductor, or black, their colours constant
+    /// or textured (not a rough material's or glass's), with no normal or bump map; any
+    /// other as `GENERAL`, textured where anything of it varies from hit to hit.
+    fn of(material: &crate::material::Material) -> Shading {
         let textured = !material.slots.is_empty();
-        let (kind, colour, eta) = Self::bsdf(&material.bsdf)?;
+        let general = Shading {
+            flags: GENERAL,
+            colour: [0.0; 3],
+            eta: 1.0,
+            rough: Rough::NONE,
+            textured: material.varies() || material.perturbs(),
+            masked: material.opacity.is_some(),
+        };
+        let Some((kind, colour, eta)) = Self::bsdf(&material.bsdf) else {
+            return general;
+        };
         // (Glass's textured factors would not be the unit ones the lanes assume, and a
-        // rough conductor's textured roughness is not looked up.)
-        if textured && (kind == GLASS || kind == ROUGH || kind == ROUGH_GLASS) {
-            return None;
+        // rough material's textured roughness is not looked up.)
+        if material.perturbs() || textured && matches!(kind, GLASS | ROUGH | ROUGH_GLASS) {
+            return general;
         }
         let (rough, distr) = match &material.bsdf {
             Bsdf::RoughConductor(b) => (
@@ -295,14 +314,14 @@ impl Shading {
             Some(d) if d.kind == MicrofacetType::Beckmann => BECKMANN,
             _ => 0,
         };
-        Some(Shading {
+        Shading {
             flags: kind | two_sided | beckmann,
             colour,
             eta,
             rough,
             textured,
             masked: material.opacity.is_some(),
-        })
+        }
     }
 
     /// The kind, colour and η of a BSDF the lanes shade (a blend is not one of them).
@@ -343,7 +362,7 @@ impl Shading {
         textures: &[crate::texture::Texture],
         uv: glam::Vec2,
     ) -> [f32; 3] {
-        if !self.textured {
+        if !self.textured || self.flags & KIND == GENERAL {
             return self.colour;
         }
         Self::bsdf(&material.bsdf_at(textures, uv)).map_or(self.colour, |(_, c, _)| c)
@@ -413,18 +432,20 @@ impl<'a> Wavefront<'a> {
             return None;
         }
         let planar = scene.lights.single_planar()?;
-        let materials = scene
-            .materials
-            .iter()
-            .map(Shading::of)
-            .collect::<Option<Vec<_>>>()?;
+        let materials: Vec<Shading> = scene.materials.iter().map(Shading::of).collect();
         // (Several light samples a vertex, the planar batch's, are Lambertian only.)
-        let has_rough = materials
+        let glossy = materials
             .iter()
-            .any(|m| matches!(m.flags & KIND, ROUGH | ROUGH_GLASS));
-        if has_rough && p.shadow_rays > 1 {
+            .any(|m| matches!(m.flags & KIND, ROUGH | ROUGH_GLASS | GENERAL));
+        if glossy && p.shadow_rays > 1 {
             return None;
         }
+        let resolved = (scene.materials.iter().zip(&materials))
+            .map(|(m, sh)| {
+                (sh.flags & KIND == GENERAL && !sh.textured)
+                    .then(|| m.at(&scene.materials, &scene.textures, glam::Vec2::ZERO, None))
+            })
+            .collect();
         let mut w = Wavefront {
             scene,
             trace: Trace::Scene,
@@ -444,6 +465,7 @@ impl<'a> Wavefront<'a> {
                 eta: [[0.0; 64]; 3],
                 k: [[1.0; 64]; 3],
             },
+            resolved,
             light: Light {
                 a: planar.a.into(),
                 b: planar.b.into(),

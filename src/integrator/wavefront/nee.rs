@@ -5,6 +5,7 @@
 //! at a time and each lane's shadow rays traced as its own packets.
 
 use super::bsdf::{flip_z, Microfacets};
+use super::general::General;
 use super::simd::{F, M, V3};
 use super::{Bits, LaneMask, Wavefront};
 use crate::accel::{RayPacket, PACKET};
@@ -33,6 +34,7 @@ pub struct Vertex<'a> {
     pub wo: V3,
     pub albedo: V3,
     pub rough: Option<&'a Microfacets>,
+    pub general: Option<&'a General<'a>>,
     pub oriented: M,
     pub side: F,
 }
@@ -78,6 +80,11 @@ impl Wavefront<'_> {
                 f = V3::select(r.glass, V3 { x: g, y: g, z: g }, f);
                 bsdf_pdf = F::select(r.glass, pdf, bsdf_pdf);
             }
+        }
+        if let Some(g) = v.general {
+            let (gf, pdf) = g.eval_pdf(v.wo, wil);
+            f = V3::select(g.glossy, gf, f);
+            bsdf_pdf = F::select(g.glossy, pdf, bsdf_pdf);
         }
         let f = V3::select(v.oriented, f, V3::zero());
         let bsdf_pdf = F::select(v.oriented, bsdf_pdf, zero);

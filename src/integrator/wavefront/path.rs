@@ -7,9 +7,11 @@ use super::nee::Vertex;
 use super::rng::LaneSampler;
 use super::simd::{F, M, U, V3};
 use super::{trace, Bits, LaneMask, Lanes, Trace, Wavefront, GROUPS};
-use crate::scene::Interaction;
+use crate::scene::{Interaction, META_MATERIAL};
 use super::bsdf::Microfacets;
-use super::{BECKMANN, BLACK, EMITTER, GLASS, KIND, LAMBERT, MIRROR, ROUGH, ROUGH_GLASS, TWO_SIDED};
+use super::general::{At, General};
+use super::{BECKMANN, BLACK, EMITTER, GENERAL, GLASS, KIND, LAMBERT, MIRROR, ROUGH, ROUGH_GLASS};
+use super::TWO_SIDED;
 use crate::material::microfacet::Either;
 use crate::material::rough_conductor::RoughConductor;
 use crate::film::PixelSums;
@@ -108,6 +110,38 @@ impl Wavefront<'_> {
             k,
             specular_reflectance: sf.colour,
         }
+    }
+
+    /// The `GENERAL` materials at the hits of lanes `lanes` ([`General`]), if any lane has
+    /// one: by primitive ([`Trace::Lanes`]: constant materials) or each hit's material.
+    #[inline(always)]
+    fn general<'s>(
+        &'s self,
+        sf: &Surface,
+        hits: &[Option<Interaction>; 16],
+        lanes: M,
+    ) -> Option<General<'s>> {
+        if !lanes.any() {
+            return None;
+        }
+        let mut prims = [0u32; 16];
+        sf.prim.store(&mut prims);
+        let scene = self.scene;
+        Some(General::new(lanes, |l| {
+            let si = match self.trace {
+                Trace::Lanes => None,
+                Trace::Scene => hits[l].as_ref(),
+            };
+            let index = match si {
+                Some(si) => si.material as usize,
+                None => (scene.meta[prims[l] as usize] & META_MATERIAL) as usize,
+            };
+            match (&self.resolved[index], si) {
+                (Some(m), _) => At::Scene(m),
+                (None, Some(si)) => At::Hit(scene.material_at(si)),
+                (None, None) => unreachable!("brute force takes constant materials only"),
+            }
+        }))
     }
 
     /// The lanes' hits by the scene's own queries ([`Trace::Scene`]): the values of each
@@ -231,7 +265,11 @@ impl Wavefront<'_> {
 
         // The path's length, and black bodies.
         let last = depth.add(U::splat(1)).ge(U::splat(self.max_depth));
-        let cont = hit & !last & !kind(BLACK);
+        let mut cont = hit & !last & !kind(BLACK);
+        let general = self.general(&sf, &st.hits, cont & kind(GENERAL));
+        if let Some(g) = &general {
+            cont &= !kind(GENERAL) | g.lanes;
+        }
         done |= hit & !cont;
 
         // The shading frame and `Material::orient`: the side the BSDF is seen from (glass:
@@ -250,17 +288,18 @@ impl Wavefront<'_> {
         } else {
             None
         };
-        // (Both glasses are seen from either side.)
+        // (Both glasses are seen from either side; the general materials orient themselves.)
         let clear = glass | frosted;
         let front = wo.z.gt(zero);
-        let oriented = clear | front | (wo.z.lt(zero) & flags.any(TWO_SIDED));
+        let own = general.as_ref().map_or(M::none(), |g| g.lanes);
+        let oriented = clear | front | (wo.z.lt(zero) & flags.any(TWO_SIDED)) | own;
         let side = F::select(clear | front, one, F::splat(-1.0));
         let colour = sf.colour;
 
         // Next-event estimation at the non-specular (Lambertian and rough) vertices: with one
         // light sample, its shadow ray and the two values `l += β·lit` can add (β times the
         // sample's contribution, or β·0 if it is blocked) wait for `shadows`.
-        let non_delta = lambert | metal | frosted;
+        let non_delta = lambert | metal | frosted | general.as_ref().map_or(M::none(), |g| g.glossy);
         let nee = cont & non_delta;
         st.shadow.lanes = 0;
         st.shadow.nee = nee.bits();
@@ -274,6 +313,7 @@ impl Wavefront<'_> {
                 wo,
                 albedo: colour,
                 rough: rough.as_ref(),
+                general: general.as_ref(),
                 oriented,
                 side,
             };
@@ -303,6 +343,7 @@ impl Wavefront<'_> {
             eta,
             (lambert, mirror, glass),
             rough.as_ref(),
+            general.as_ref(),
             oriented,
             side,
         );
@@ -329,7 +370,7 @@ impl Wavefront<'_> {
         bs.pdf.store(&mut st.prev_pdf);
         depth.store(&mut st.depth);
         // After a specular bounce the next emitter hit takes no MIS weight.
-        st.has_prev = (alive & non_delta).bits();
+        st.has_prev = (alive & bs.glossy).bits();
         st.active = alive.bits();
         st.done = done.bits();
     }
