@@ -812,6 +812,54 @@ fn general_materials_both_ways() {
     }
 }
 
+/// The feature scenes of `tests/data/toml` (point, spot, directional, sphere, disk, mesh and
+/// textured area lights, constant and bitmap environments; every BSDF, textured parameters,
+/// blends), which the lanes render through the scene's queries, asking `Lights` lane by lane
+/// where there is more than one planar light: the same film as one path at a time, with
+/// hidden emitters, a fixed roulette and short paths too.
+#[test]
+fn feature_scenes_both_ways() {
+    if !cpu_runs_it() {
+        return;
+    }
+    use mcrt::integrator::RussianRoulette;
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/toml");
+    let mut names: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    names.sort();
+    assert!(names.len() >= 7, "the feature scenes are there");
+    for (k, path) in names.iter().enumerate() {
+        let scene = Scene::build(mcrt::load_scene(path).unwrap());
+        let hide = k % 2 == 1;
+        let mut s = settings(
+            &scene,
+            FileSettings {
+                width: Some(29),
+                height: Some(23),
+                spp: Some(4),
+                seed: Some(110 + k as u64),
+                hide_emitters: Some(hide),
+                ..Default::default()
+            },
+        );
+        s.params.max_depth = Some([3, 12][k % 2]);
+        if k % 3 == 0 {
+            s.params.rr = RussianRoulette::Fixed(0.7);
+        }
+        let w = Wavefront::new(&scene, &s);
+        assert!(w.is_some_and(|w| !w.is_brute_force()), "{}", path.display());
+        let what = format!("{}, hide {hide}", path.display());
+        let (film, _) = same_both_ways(scene, &s, &what);
+        assert!(
+            film.sum_f64().iter().flatten().sum::<f64>() > 0.0,
+            "{what}: lit"
+        );
+    }
+}
+
 /// A sphere of radius `r` at `c` as a mesh of `2·rings·segments` triangles with smooth
 /// vertex normals (the sphere's), in `material`.
 fn smooth_ball(c: [f32; 3], r: f32, material: &str, rings: usize, segments: usize) -> String {
@@ -966,42 +1014,17 @@ fn traced_through_the_scene_both_ways() {
     }
 }
 
-/// An opacity mask (Mitsuba's `mask` with a bitmap opacity of 1, 0.5 and 0) in front of the
-/// light, which the scene's queries see through for camera and shadow rays alike, and a
-/// normal-mapped rectangle and a bump-mapped sphere (whose `Material`s the lanes call): the
-/// feature scene `maps-mask.xml` without its second light and environment, which the lanes
-/// do not take.
+/// The feature scene `maps-mask.xml`: an opacity mask (Mitsuba's `mask` with a bitmap
+/// opacity of 1, 0.5 and 0) in front of a light, which the scene's queries see through for
+/// camera and shadow rays alike, a normal-mapped rectangle and a bump-mapped sphere (whose
+/// `Material`s the lanes call), two area lights and an environment.
 #[test]
 fn masks_and_maps_traced_through_the_scene_both_ways() {
     if !cpu_runs_it() {
         return;
     }
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mitsuba/features");
-    let mut xml = std::fs::read_to_string(dir.join("maps-mask.xml")).unwrap();
-    let cut = |xml: &mut String, from: &str, to: &str| {
-        let a = xml
-            .find(from)
-            .expect("the feature scene holds the part to cut");
-        let b = a + xml[a..].find(to).unwrap() + to.len();
-        xml.replace_range(a..b, "");
-    };
-    let shape = "<shape type=\"rectangle\">\n        <transform name=\"to_world\">";
-    cut(
-        &mut xml,
-        &format!("{shape}<scale x=\"1.2\" y=\"0.8\"/>"),
-        "</shape>",
-    );
-    cut(&mut xml, "<emitter type=\"constant\">", "</emitter>");
-    for png in ["maps-leaf.png", "maps-normal.png", "maps-height.png"] {
-        xml = xml.replace(
-            &format!("\"{png}\""),
-            &format!("\"{}\"", dir.join(png).display()),
-        );
-    }
-    let path = std::env::temp_dir().join(format!("mcrt-wavefront-mask-{}.xml", std::process::id()));
-    std::fs::write(&path, xml).unwrap();
-    let scene = Scene::build(mcrt::load_scene(&path).unwrap());
-    std::fs::remove_file(&path).unwrap();
+    let scene = Scene::build(mcrt::load_scene(&dir.join("maps-mask.xml")).unwrap());
     assert!(scene.materials.iter().any(|m| m.opacity.is_some()));
     assert!(scene.materials.iter().any(|m| m.normal_map.is_some()));
     assert!(scene.materials.iter().any(|m| m.bump.is_some()));
@@ -1046,29 +1069,30 @@ fn declines_what_it_does_not_do() {
         let w = Wavefront::new(scene, &s);
         assert!(w.is_some_and(|w| !w.is_brute_force()), "{what}");
     };
-    let declined = |what: &str, text: &str| {
-        let scene = scene_from(text);
-        let s = settings(&scene, FileSettings::default());
-        assert!(Wavefront::new(&scene, &s).is_none(), "{what}");
-    };
-    // A second light, a sphere light, a texture, vertex normals.
-    declined(
-        "two lights",
-        &(OPEN.to_string()
-            + r#"
+    // A second light, a sphere light: through the scene, with one shadow ray a vertex (the
+    // batch of several is the one planar light's).
+    let two_lights = OPEN.to_string()
+        + r#"
 [[shape]]
 type = "triangle"
 emission = [1, 1, 1]
 vertices = [[2, 0.1, 0], [2, 0.1, 1], [2, 1, 0]]
-"#),
+"#;
+    let sphere_light = OPEN.replace(
+        "type = \"quad\"\nemission = [6, 6, 6]\nvertices = [[-0.4, 1.2, -0.4], [-0.4, 1.2, 0.4], [0.4, 1.2, 0.4], [0.4, 1.2, -0.4]]",
+        "type = \"sphere\"\nemission = [6, 6, 6]\ncenter = [0, 1.2, 0]\nradius = 0.2",
     );
-    declined(
-        "a sphere light",
-        &OPEN.replace(
-            "type = \"quad\"\nemission = [6, 6, 6]\nvertices = [[-0.4, 1.2, -0.4], [-0.4, 1.2, 0.4], [0.4, 1.2, 0.4], [0.4, 1.2, -0.4]]",
-            "type = \"sphere\"\nemission = [6, 6, 6]\ncenter = [0, 1.2, 0]\nradius = 0.2",
-        ),
-    );
+    assert!(sphere_light.contains("radius = 0.2"));
+    for (what, text) in [("two lights", two_lights), ("a sphere light", sphere_light)] {
+        let scene = scene_from(&text);
+        through_scene(what, &scene);
+        let mut s = settings(&scene, FileSettings::default());
+        s.params.shadow_rays = 2;
+        assert!(
+            Wavefront::new(&scene, &s).is_none(),
+            "{what}, two shadow rays"
+        );
+    }
     // Rough and general materials with several shadow rays a vertex (the batch is
     // Lambertian).
     for (what, text) in [

@@ -10,6 +10,8 @@ mod bsdf;
 mod general;
 #[path = "lanes.rs"]
 mod lanes;
+#[path = "lights.rs"]
+mod lights;
 #[path = "nee.rs"]
 mod nee;
 #[path = "path.rs"]
@@ -19,7 +21,7 @@ mod rng;
 #[path = "trace.rs"]
 mod trace;
 
-use lanes::{Lanes, GROUPS};
+use lanes::{Lanes, POOL};
 
 /// The scene prepared for the lanes, seen by the code compiled for this backend.
 pub(super) struct Wavefront<'a>(pub &'a super::Wavefront<'a>);

@@ -10,7 +10,7 @@
 use super::simd::{F, M, V3};
 use super::{Bits, LaneMask};
 use crate::material::{Material, TransportMode};
-use crate::simd::{lanes_of, Vector3};
+use crate::simd::lanes_of;
 use glam::{Vec2, Vec3A};
 
 /// A lane's material: the scene's own where it is the same at every hit, else the one at
@@ -80,7 +80,7 @@ impl<'a> General<'a> {
     /// zero in the other lanes.
     #[inline(always)]
     pub fn eval_pdf(&self, wo: V3, wi: V3) -> (V3, F) {
-        let (wo, wi) = (arrays(wo), arrays(wi));
+        let (wo, wi) = (wo.to_arrays(), wi.to_arrays());
         let mut f = [[0f32; 16]; 3];
         let mut pdf = [0f32; 16];
         for l in lanes_of(u32::from(self.glossy.bits())) {
@@ -95,7 +95,7 @@ impl<'a> General<'a> {
     /// numbers `[ux, uy, u1]` (the direction's pair and the lobe's choice).
     #[inline(always)]
     pub fn sample(&self, wo: V3, [ux, uy, u1]: [F; 3]) -> Sample {
-        let wo = arrays(wo);
+        let wo = wo.to_arrays();
         let (ux, uy, u1) = (ux.to_array(), uy.to_array(), u1.to_array());
         let (mut wi, mut weight) = ([[0f32; 16]; 3], [[0f32; 16]; 3]);
         let (mut pdf, mut eta) = ([0f32; 16], [1f32; 16]);
@@ -123,14 +123,8 @@ impl<'a> General<'a> {
     }
 }
 
-/// The lanes of `v`, by component.
-#[inline(always)]
-fn arrays(v: V3) -> [[f32; 16]; 3] {
-    [v.x().to_array(), v.y().to_array(), v.z().to_array()]
-}
-
 /// Lane `l` of `a` as one vector.
 #[inline(always)]
-fn lane(a: &[[f32; 16]; 3], l: usize) -> Vec3A {
+pub fn lane(a: &[[f32; 16]; 3], l: usize) -> Vec3A {
     Vec3A::new(a[0][l], a[1][l], a[2][l])
 }

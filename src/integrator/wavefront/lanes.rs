@@ -52,19 +52,30 @@ pub(super) struct Shadows {
     pub(super) blocked: Bits,
     pub(super) o: [[f32; 16]; 3],
     pub(super) d: [[f32; 16]; 3],
+    /// How far each ray must be clear (1 − `SHADOW_EPSILON` to a point, ∞ to a light at
+    /// infinity).
+    pub(super) t_max: [f32; 16],
     /// What `l += β·lit` adds: β times the contribution where the ray is clear, β·0 where
     /// it is blocked or there is no ray.
     pub(super) lit: [[f32; 16]; 3],
     pub(super) dark: [[f32; 16]; 3],
 }
 
-/// Groups of sixteen lanes a tile keeps in flight. Each group's light samples leave shadow
-/// rays in about half its lanes (the others' paths end, or their sample lies behind the
-/// surface: 58 % of them carry one in the Cornell box), so each group alone would trace
-/// vectors half full; four groups' rays pack into about three. Measured on the Cornell box
-/// (256², 64 spp, one thread, three rounds alternating): 1.45–1.72 s against 1.59–1.85 s
-/// for one group; two groups were no faster, six or eight no faster than four.
-pub(super) const GROUPS: usize = 4;
+/// Groups of sixteen lanes whose shadow rays are traced together. Each group's light
+/// samples leave shadow rays in about half its lanes (the others' paths end, or their sample
+/// lies behind the surface: 58 % of them carry one in the Cornell box), so each group alone
+/// would trace vectors half full; four groups' rays pack into about three (and their answers
+/// into a u64). Measured on the Cornell box by brute force (256², 64 spp, one thread, three
+/// rounds alternating): 1.45–1.72 s against 1.59–1.85 s for one group; two groups were no
+/// faster, six or eight no faster than four. Brute force keeps this many groups in flight.
+pub(super) const POOL: usize = 4;
+
+/// Groups of sixteen lanes a tile keeps in flight through the scene's queries
+/// ([`Trace::Scene`]): all their closest hits go to `Scene::intersect_many` in one call,
+/// whose interleaved traversals overlap more cache misses with more rays (the gallery, one
+/// thread, 256², 32 spp, three rounds alternating: 0.90–0.91 M samples/s with four groups,
+/// 0.92–0.94 with sixteen, the stream's 256 paths a tile 0.86–0.91; the bunny box level).
+pub(super) const GROUPS: usize = 16;
 
 impl Wavefront<'_> {
     lanes_fn! {
@@ -97,19 +108,24 @@ impl Wavefront<'_> {
                 blocked: 0,
                 o: [[0.0; 16]; 3],
                 d: [[0.0; 16]; 3],
+                t_max: [0.0; 16],
                 lit: [[0.0; 16]; 3],
                 dark: [[0.0; 16]; 3],
             },
             hits: [None; 16],
         };
-        let mut all: [Lanes<S>; GROUPS] = std::array::from_fn(|_| lanes());
         // Several light samples a vertex are traced as each lane's packets, in `front`:
-        // nothing to pool, so one group.
-        let groups = if self.shadow_rays == 1 {
-            &mut all[..]
+        // nothing to pool, so one group. (Only the groups used are made: each is a few
+        // kilobytes, which a tile's start would otherwise copy for nothing.)
+        let n = if self.shadow_rays > 1 {
+            1
+        } else if self.trace == Trace::Lanes {
+            POOL
         } else {
-            &mut all[..1]
+            GROUPS
         };
+        let mut all: Vec<Lanes<S>> = (0..n).map(|_| lanes()).collect();
+        let groups = &mut all[..];
         // The next camera sample: pixel k, sample i.
         let (mut k, mut i) = (0usize, pixels.first().map_or(0, |p| p.samples.0));
         let (mut px, mut py) = ([0f32; 16], [0f32; 16]);
@@ -151,7 +167,9 @@ impl Wavefront<'_> {
             for st in groups.iter_mut().filter(|st| st.active != 0) {
                 self.front(st, stats);
             }
-            self.shadows(groups, &mut rays);
+            for pool in groups.chunks_mut(POOL) {
+                self.shadows(pool, &mut rays);
+            }
             for st in groups.iter_mut() {
                 self.back(st, pixels, sums, stats);
             }

@@ -10,9 +10,10 @@
 //! their BSDFs ([`bsdf`]) and plays their roulette ([`path`]), with the branches turned into
 //! lane masks. A lane whose path ends takes the tile's next camera sample at the next step,
 //! so the lanes stay full until the tile runs out of samples. With one light sample a
-//! vertex, a tile keeps [`GROUPS`] groups of sixteen paths in flight and traces their shadow
-//! rays together, packed sixteen to a vector (each group's rays fill about half of one): a step
-//! is [`Wavefront::front`] for every group, [`Wavefront::shadows`], then
+//! vertex, a tile keeps several groups of sixteen paths in flight (`lanes::POOL` by brute
+//! force, `lanes::GROUPS` through the scene) and traces the shadow rays of each pool of
+//! groups together, packed sixteen to a vector (each group's rays fill about half of one): a
+//! step is [`Wavefront::front`] for every group, [`Wavefront::shadows`] for every pool, then
 //! [`Wavefront::back`] for every group.
 //!
 //! The hits come one of two ways ([`Trace`]). Where the path tracer itself traces single rays
@@ -39,20 +40,22 @@
 //! branch (what is still the lanes' own: the brute-force traversal, the material dispatch by
 //! masks, the roulette).
 //!
-//! The scenes it takes ([`Wavefront::new`]): any material; one light, a triangle or a
-//! parallelogram of constant radiance; a pinhole or perspective camera; the `path`
-//! integrator, any number of shadow rays (one only with AVX2, or where a material is not
-//! Lambertian, mirror or smooth glass), either sampler. The lanes shade in their registers
-//! the Lambertian, mirror, smooth glass, rough conductor and rough glass (Beckmann or GGX,
-//! isotropic or not; glass of unit factors) and black materials, their colours constant or
-//! textured (looked up at each hit as `Scene::material_at` does, so not with brute force; a
-//! rough material's not), with no normal or bump map; every other material (`GENERAL`: the
-//! plastics, principled, Oren–Nayar, smooth conductors, blends, maps, textured roughness)
-//! by calling each lane's `Material` ([`general`]), which brute force takes where it is
-//! the same at every hit. The Cornell box, the TNCG15 room, the Cornell box with the
-//! Stanford bunny and the Cornell box in five BSDFs of the benchmark are such scenes. Any
-//! other scene, and any CPU without AVX2, BMI1, BMI2 and POPCNT, renders with the stream
-//! ([`super::stream`]) or `path::li`.
+//! The scenes it takes ([`Wavefront::new`]): any material, any lights; a pinhole or
+//! perspective camera; the `path` integrator, any number of shadow rays where the one light
+//! is a triangle or a parallelogram of constant radiance and every material Lambertian,
+//! mirror or smooth glass (else one; with AVX2 always one), either sampler. One such planar
+//! light the lanes sample in their registers; any other lights (several, spheres, meshes,
+//! textured, point, spot, directional, environments) each lane asks of `Lights`, a lane at a
+//! time, with the path tracer's own functions ([`lights`]), and those scenes are traced
+//! through the scene's queries. The lanes shade in their registers the Lambertian, mirror,
+//! smooth glass, rough conductor and rough glass (Beckmann or GGX, isotropic or not; glass
+//! of unit factors) and black materials, their colours constant or textured (looked up at
+//! each hit as `Scene::material_at` does, so not with brute force; a rough material's not),
+//! with no normal or bump map; every other material (`GENERAL`: the plastics, principled,
+//! Oren–Nayar, smooth conductors, blends, maps, textured roughness) by calling each lane's
+//! `Material` ([`general`]), which brute force takes where it is the same at every hit. Every scene of the benchmark is such a scene. Other cameras,
+//! integrators and light batches, and any CPU without AVX2, BMI1, BMI2 and POPCNT, render
+//! with the stream ([`super::stream`]) or `path::li`.
 //!
 //! The lanes' code is written once over a small SIMD type of sixteen lanes and compiled
 //! twice ([`Backend`]): in one AVX-512 register ([`avx512`]) and in two AVX2 registers
@@ -159,7 +162,9 @@ pub struct Wavefront<'a> {
     /// Each `GENERAL` material as every hit sees it, where that is the same at every hit
     /// (no texture, blend, normal or bump map), by material index.
     resolved: Vec<Option<crate::material::Material>>,
-    light: Light,
+    /// The scene's light where it has one light, planar, which the lanes sample in their
+    /// registers; None for any other lights, which each lane asks `Lights` for ([`lights`]).
+    light: Option<Light>,
     max_depth: u32,
     rr: RussianRoulette,
     hide_emitters: bool,
@@ -431,7 +436,11 @@ impl<'a> Wavefront<'a> {
         {
             return None;
         }
-        let planar = scene.lights.single_planar()?;
+        let planar = scene.lights.single_planar();
+        // (Several light samples a vertex are the planar batch's.)
+        if planar.is_none() && p.shadow_rays > 1 {
+            return None;
+        }
         let materials: Vec<Shading> = scene.materials.iter().map(Shading::of).collect();
         // (Several light samples a vertex, the planar batch's, are Lambertian only.)
         let glossy = materials
@@ -466,7 +475,7 @@ impl<'a> Wavefront<'a> {
                 k: [[1.0; 64]; 3],
             },
             resolved,
-            light: Light {
+            light: planar.map(|planar| Light {
                 a: planar.a.into(),
                 b: planar.b.into(),
                 c: planar.c.into(),
@@ -476,7 +485,7 @@ impl<'a> Wavefront<'a> {
                 area: planar.area,
                 radiance: planar.radiance.into(),
                 pmf: scene.lights.pmf(0),
-            },
+            }),
             max_depth: p.max_depth.unwrap_or(u32::MAX),
             rr: p.rr,
             hide_emitters: p.hide_emitters,
@@ -504,11 +513,13 @@ impl<'a> Wavefront<'a> {
     /// takes: one the path tracer traces by brute force too (`accel::flat`: at most
     /// [`MAX_PRIMS`] primitives), since elsewhere it uses the BVH, which for a grazing ray
     /// may skip a primitive brute force would test; with no vertex normals (the lanes shade
-    /// with the face's), no textures, no instances and no emitting or inward-facing spheres.
+    /// with the face's), no textures, no instances, no emitting or inward-facing spheres, and
+    /// one planar light (other lights read each hit's `Interaction`).
     fn fill_tables(&mut self) -> bool {
         let scene = self.scene;
         let n = scene.tris.len();
         if n == 0
+            || self.light.is_none()
             || n > MAX_PRIMS
             || !scene.is_flat()
             || !scene.attrs.is_empty()

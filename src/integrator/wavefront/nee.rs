@@ -1,13 +1,15 @@
-//! Next-event estimation lane by lane, for the scene's one planar light: one sample a
-//! vertex as `nee::one_sample` computes it (its shadow rays are left to the caller, which
-//! pools them across groups of lanes), or n as the planar batch does
-//! (`nee::planar::planar::<true>`, Lambertian vertices), the samples computed sixteen lanes
-//! at a time and each lane's shadow rays traced as its own packets.
+//! Next-event estimation lane by lane: one sample a vertex as `nee::one_sample` computes it
+//! (its shadow rays are left to the caller, which pools them across groups of lanes), the
+//! light sampled in the lanes where the scene has one planar light and asked of `Lights`
+//! lane by lane otherwise ([`super::lights`]); or, with one planar light, n samples as the
+//! planar batch does (`nee::planar::planar::<true>`, Lambertian vertices), the samples
+//! computed sixteen lanes at a time and each lane's shadow rays traced as its own packets.
 
 use super::bsdf::{flip_z, Microfacets};
 use super::general::General;
+use super::lights::Incident;
 use super::simd::{F, M, V3};
-use super::{Bits, LaneMask, Wavefront};
+use super::{Bits, LaneMask, Light, Wavefront};
 use crate::accel::{RayPacket, PACKET};
 use crate::geometry::ray::{offset_by, offset_push, offset_ray_origin, SHADOW_EPSILON};
 use crate::geometry::Frame;
@@ -40,63 +42,39 @@ pub struct Vertex<'a> {
 }
 
 impl Wavefront<'_> {
-    /// One light sample at the Lambertian and rough vertices of lanes `lanes` (`one_sample`:
-    /// `Lights::sample`, `Material::eval_pdf`, the shadow ray of `spawn_ray_to`, the power
-    /// heuristic), `u` its numbers: the lanes whose sample needs a shadow ray (the others
-    /// contribute nothing), the rays' origins and directions (to be clear up to
-    /// 1 − `SHADOW_EPSILON`), and the samples' contributions where the ray is clear.
+    /// One light sample at the non-delta vertices of lanes `lanes` (`one_sample`:
+    /// `Lights::sample`, `Material::eval_pdf`, the shadow ray of `spawn_ray_to_light`, the
+    /// power heuristic), `u` its numbers, `hits` the lanes' hits where the lanes read the
+    /// scene's ([`super::Trace::Scene`]): the lanes whose sample needs a shadow ray (the
+    /// others contribute nothing), the rays' origins, directions and how far they must be
+    /// clear, and the samples' contributions where the ray is clear.
     #[inline(always)]
     pub(super) unsafe fn one_sample(
         &self,
         v: &Vertex,
+        hits: &[Option<crate::scene::Interaction>; 16],
         lanes: M,
-        [ux, uy, _]: [F; 3],
-    ) -> (M, V3, V3, V3) {
-        let (zero, one) = (F::zero(), F::splat(1.0));
-        let lt = &self.light;
-        let (la, lb, lc) = (V3::splat(lt.a), V3::splat(lt.b), V3::splat(lt.c));
-        // `AreaLight::sample_point` and `Lights::sample` (`sample_discrete` gives the one
-        // light probability one).
-        let pl = planar_point(la, lb, lc, lt.triangle, ux, uy);
-        let ln = V3::splat(lt.normal);
-        let (dl, dist2, wi, cos_l, pdf) = towards(v.p, pl, ln, one, F::splat(lt.area));
+        u: [F; 3],
+    ) -> (M, V3, V3, F, V3) {
+        let one = F::splat(1.0);
+        let inc = match &self.light {
+            Some(lt) => planar_sample(lt, v, u),
+            None => self.light_samples(hits, lanes, u),
+        };
         // `Material::eval_pdf` on the side the path is on: `Lambert::eval` and `pdf`, or the
-        // rough conductor's; the rough dielectric's from either side.
-        let wil = v.frame.to_local(wi);
-        let wz = wil.z * v.side;
-        let mut f = lambert::eval(v.albedo, wz);
-        let mut bsdf_pdf = cosine_hemisphere_pdf_lanes(wz);
-        if let Some(r) = v.rough {
-            if r.metal.any() {
-                let (wo, wi) = (flip_z(v.wo, v.side), flip_z(wil, v.side));
-                f = V3::select(r.metal, r.conductor.eval_lanes(wo, wi), f);
-                bsdf_pdf = F::select(r.metal, r.conductor.pdf_lanes(wo, wi), bsdf_pdf);
-            }
-            if r.glass.any() {
-                let distr = &r.conductor.distr;
-                let mode = TransportMode::Radiance;
-                let (g, _) = rough_dielectric::eval_lanes(distr, r.eta, v.wo, wil, mode);
-                let pdf = rough_dielectric::pdf_lanes(distr, r.eta, v.wo, wil);
-                f = V3::select(r.glass, V3 { x: g, y: g, z: g }, f);
-                bsdf_pdf = F::select(r.glass, pdf, bsdf_pdf);
-            }
-        }
-        if let Some(g) = v.general {
-            let (gf, pdf) = g.eval_pdf(v.wo, wil);
-            f = V3::select(g.glossy, gf, f);
-            bsdf_pdf = F::select(g.glossy, pdf, bsdf_pdf);
-        }
-        let f = V3::select(v.oriented, f, V3::zero());
-        let bsdf_pdf = F::select(v.oriented, bsdf_pdf, zero);
+        // rough conductor's; the rough dielectric's and the general materials' from either
+        // side.
+        let wil = v.frame.to_local(inc.wi);
+        let (f, bsdf_pdf) = eval_pdf(v, wil);
         let f = f.scale(wil.z.abs());
-        let shadow = lanes & !dist2.eq(zero) & !cos_l.le(zero) & !f.is_zero();
-        // The shadow ray (`spawn_ray_to`), both ends pushed off their surfaces.
-        let so = offset_ray_origin(v.p, v.p_err, v.ng, dl);
-        let loff = V3::splat(lt.offset);
-        let target = offset_by(pl, loff, ln, so - pl);
-        let mis = power_heuristic_lanes(one * pdf, bsdf_pdf);
-        let contribution = (f * V3::splat(lt.radiance)).scale(mis / pdf);
-        (shadow, so, target - so, contribution)
+        let shadow = lanes & inc.ok & !f.is_zero();
+        let mis = F::select(
+            inc.delta,
+            one,
+            power_heuristic_lanes(one * inc.pdf, bsdf_pdf),
+        );
+        let contribution = (f * inc.le).scale(mis / inc.pdf);
+        (shadow, inc.o, inc.d, inc.t_max, contribution)
     }
 
     /// The light's contribution at the Lambertian vertices of lanes `lanes` with `n` > 1
@@ -123,7 +101,9 @@ impl Wavefront<'_> {
             return V3::zero();
         }
         let zero = F::zero();
-        let lt = &self.light;
+        let Some(lt) = &self.light else {
+            return V3::zero();
+        };
         let n = self.shadow_rays;
         let nf = n as f32;
         let (a, b, c) = (V3::splat(lt.a), V3::splat(lt.b), V3::splat(lt.c));
@@ -205,4 +185,61 @@ impl Wavefront<'_> {
         let e = (v.albedo.scale(F::splat(FRAC_1_PI)) * V3::splat(lt.radiance)).scale(sum);
         V3::select(lanes, e.div(F::splat(nf)), V3::zero())
     }
+}
+
+/// A sample of the one planar light `lt` at each lane's vertex (`AreaLight::sample_point`
+/// and `Lights::sample`, which gives the one light probability one), for the numbers `[ux,
+/// uy, _]`, and its shadow ray (`spawn_ray_to`, both ends pushed off their surfaces).
+#[inline(always)]
+fn planar_sample(lt: &Light, v: &Vertex, [ux, uy, _]: [F; 3]) -> Incident {
+    let (zero, one) = (F::zero(), F::splat(1.0));
+    let (la, lb, lc) = (V3::splat(lt.a), V3::splat(lt.b), V3::splat(lt.c));
+    let pl = planar_point(la, lb, lc, lt.triangle, ux, uy);
+    let ln = V3::splat(lt.normal);
+    let (dl, dist2, wi, cos_l, pdf) = towards(v.p, pl, ln, one, F::splat(lt.area));
+    let so = offset_ray_origin(v.p, v.p_err, v.ng, dl);
+    let target = offset_by(pl, V3::splat(lt.offset), ln, so - pl);
+    Incident {
+        ok: !dist2.eq(zero) & !cos_l.le(zero),
+        wi,
+        le: V3::splat(lt.radiance),
+        pdf,
+        delta: M::none(),
+        o: so,
+        d: target - so,
+        t_max: F::splat(1.0 - SHADOW_EPSILON),
+    }
+}
+
+/// f(wo, wi) and the pdf of sampling `wil` (local) at each lane's vertex
+/// (`Material::eval_pdf`): zero where the vertex is not `oriented`.
+#[inline(always)]
+fn eval_pdf(v: &Vertex, wil: V3) -> (V3, F) {
+    let wz = wil.z * v.side;
+    let mut f = lambert::eval(v.albedo, wz);
+    let mut bsdf_pdf = cosine_hemisphere_pdf_lanes(wz);
+    if let Some(r) = v.rough {
+        if r.metal.any() {
+            let (wo, wi) = (flip_z(v.wo, v.side), flip_z(wil, v.side));
+            f = V3::select(r.metal, r.conductor.eval_lanes(wo, wi), f);
+            bsdf_pdf = F::select(r.metal, r.conductor.pdf_lanes(wo, wi), bsdf_pdf);
+        }
+        if r.glass.any() {
+            let distr = &r.conductor.distr;
+            let mode = TransportMode::Radiance;
+            let (g, _) = rough_dielectric::eval_lanes(distr, r.eta, v.wo, wil, mode);
+            let pdf = rough_dielectric::pdf_lanes(distr, r.eta, v.wo, wil);
+            f = V3::select(r.glass, V3 { x: g, y: g, z: g }, f);
+            bsdf_pdf = F::select(r.glass, pdf, bsdf_pdf);
+        }
+    }
+    if let Some(g) = v.general {
+        let (gf, pdf) = g.eval_pdf(v.wo, wil);
+        f = V3::select(g.glossy, gf, f);
+        bsdf_pdf = F::select(g.glossy, pdf, bsdf_pdf);
+    }
+    (
+        V3::select(v.oriented, f, V3::zero()),
+        F::select(v.oriented, bsdf_pdf, F::zero()),
+    )
 }

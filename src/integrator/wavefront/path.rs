@@ -6,16 +6,17 @@ use super::bsdf;
 use super::nee::Vertex;
 use super::rng::LaneSampler;
 use super::simd::{F, M, U, V3};
-use super::{trace, Bits, LaneMask, Lanes, Trace, Wavefront, GROUPS};
+use super::{trace, Bits, LaneMask, Lanes, Trace, Wavefront, POOL};
 use crate::scene::{Interaction, META_MATERIAL};
 use super::bsdf::Microfacets;
 use super::general::{At, General};
+use super::lights::Prev;
 use super::{BECKMANN, BLACK, EMITTER, GENERAL, GLASS, KIND, LAMBERT, MIRROR, ROUGH, ROUGH_GLASS};
 use super::TWO_SIDED;
 use crate::material::microfacet::Either;
 use crate::material::rough_conductor::RoughConductor;
 use crate::film::PixelSums;
-use crate::geometry::ray::{offset_ray_origin, SHADOW_EPSILON};
+use crate::geometry::ray::offset_ray_origin;
 use crate::geometry::sphere::surface_point;
 use crate::geometry::triangle::barycentric_point;
 use crate::geometry::Frame;
@@ -238,29 +239,41 @@ impl Wavefront<'_> {
         } else {
             M::none()
         };
-        // A ray that leaves the scene: these scenes have no environment light, so it adds
-        // β·0, as `escaped` returns (which is not nothing where β is not finite).
+        let prev = Prev {
+            lanes: M::from_bits(st.has_prev),
+            p: V3::load(&st.prev_p),
+            pdf: F::load(&st.prev_pdf),
+        };
+        // A ray that leaves the scene: what the environment lights send back along it
+        // (`escaped`; β·0 without one, which is not nothing where β is not finite).
         let miss = active & !sf.hit;
-        l = V3::select(miss & !hidden, l + beta * V3::zero(), l);
+        let env = match self.light {
+            Some(_) => V3::zero(),
+            None => self.escaped_lanes(d, miss & !hidden, &prev),
+        };
+        l = V3::select(miss & !hidden, l + beta * env, l);
         let mut done = miss;
         let (hit, p, p_err, ng, flags) = (sf.hit, sf.p, sf.p_err, sf.ng, sf.flags);
         let kind = |k: u32| hit & flags.masked_eq(KIND, k);
-        let lt = &self.light;
 
         // Emission (`emitted`), weighted against light sampling where the path got here by
         // a non-specular BSDF sample.
-        let emitter = hit & flags.any(EMITTER);
         let nd = -d;
-        let le = V3::select(
-            emitter & ng.dot(nd).gt(zero),
-            V3::splat(lt.radiance),
-            V3::zero(),
-        );
-        let prev_p = V3::load(&st.prev_p);
-        let light_pdf = area_pdf(prev_p, p, ng, F::splat(lt.pmf), F::splat(lt.area));
-        let rays = F::splat(self.shadow_rays as f32);
-        let mis = power_heuristic_lanes(F::load(&st.prev_pdf), rays * light_pdf);
-        let e = V3::select(emitter & M::from_bits(st.has_prev), le.scale(mis), le);
+        let e = match &self.light {
+            Some(lt) => {
+                let emitter = hit & flags.any(EMITTER);
+                let le = V3::select(
+                    emitter & ng.dot(nd).gt(zero),
+                    V3::splat(lt.radiance),
+                    V3::zero(),
+                );
+                let light_pdf = area_pdf(prev.p, p, ng, F::splat(lt.pmf), F::splat(lt.area));
+                let rays = F::splat(self.shadow_rays as f32);
+                let mis = power_heuristic_lanes(prev.pdf, rays * light_pdf);
+                V3::select(emitter & prev.lanes, le.scale(mis), le)
+            }
+            None => self.emitted_lanes(&st.hits, d, hit & flags.any(EMITTER) & !hidden, &prev),
+        };
         l = V3::select(hit & !hidden, l + beta * e, l);
 
         // The path's length, and black bodies.
@@ -300,7 +313,12 @@ impl Wavefront<'_> {
         // light sample, its shadow ray and the two values `l += β·lit` can add (β times the
         // sample's contribution, or β·0 if it is blocked) wait for `shadows`.
         let non_delta = lambert | metal | frosted | general.as_ref().map_or(M::none(), |g| g.glossy);
-        let nee = cont & non_delta;
+        // (Without lights, `PathState::step` samples none and draws no numbers for them.)
+        let nee = if self.scene.lights.is_empty() {
+            M::none()
+        } else {
+            cont & non_delta
+        };
         st.shadow.lanes = 0;
         st.shadow.nee = nee.bits();
         if nee.any() {
@@ -318,12 +336,13 @@ impl Wavefront<'_> {
                 side,
             };
             if self.shadow_rays == 1 {
-                let (lanes, o, d, contribution) = self.one_sample(&v, nee, u);
+                let (lanes, o, d, t_max, contribution) = self.one_sample(&v, &st.hits, nee, u);
                 stats.rays.shadow_rays += lanes.count() as u64;
                 let sh = &mut st.shadow;
                 sh.lanes = lanes.bits();
                 o.store(&mut sh.o);
                 d.store(&mut sh.d);
+                t_max.store(&mut sh.t_max);
                 (beta * contribution).store(&mut sh.lit);
                 (beta * V3::zero()).store(&mut sh.dark);
             } else {
@@ -440,10 +459,11 @@ impl Wavefront<'_> {
         use std::arch::x86_64::{_pdep_u64, _pext_u64};
         // The rays, packed: origin and direction by axis. Room for every group's sixteen,
         // their answers a bit each of a u64.
-        const ROOM: usize = 16 * GROUPS;
+        const ROOM: usize = 16 * POOL;
         const { assert!(ROOM <= 64, "more shadow rays than bits in the answer") };
         let mut o = [[0f32; ROOM + 16]; 3];
         let mut d = [[0f32; ROOM + 16]; 3];
+        let mut t_max = [0f32; ROOM + 16];
         let mut n = 0;
         // The packed rays that leave a path's first vertex (bit k: ray k).
         let mut first = 0u64;
@@ -461,12 +481,13 @@ impl Wavefront<'_> {
                 F::load(&sh.o[axis]).compress_to(sh.lanes, &mut o[axis], n);
                 F::load(&sh.d[axis]).compress_to(sh.lanes, &mut d[axis], n);
             }
+            F::load(&sh.t_max).compress_to(sh.lanes, &mut t_max, n);
             n += sh.lanes.count_ones() as usize;
         }
         // Their answers, a bit a ray.
         let blocked = match self.trace {
-            Trace::Lanes => self.occluded_lanes(&o, &d, n),
-            Trace::Scene => self.occluded_scene(&o, &d, n, first, rays),
+            Trace::Lanes => self.occluded_lanes(&o, &d, &t_max, n),
+            Trace::Scene => self.occluded_scene(&o, &d, &t_max, n, first, rays),
         };
         let mut at = 0;
         for g in groups.iter_mut() {
@@ -477,8 +498,8 @@ impl Wavefront<'_> {
     }
     }
 
-    /// Which of the `n` packed shadow rays are blocked, a bit a ray, sixteen at a time
-    /// against every primitive ([`Trace::Lanes`]).
+    /// Which of the `n` packed shadow rays (clear up to `t_max`) are blocked, a bit a ray,
+    /// sixteen at a time against every primitive ([`Trace::Lanes`]).
     ///
     /// # Safety
     /// The CPU must have the backend's features (`trace::occluded`).
@@ -487,10 +508,10 @@ impl Wavefront<'_> {
         &self,
         o: &[[f32; ROOM]; 3],
         d: &[[f32; ROOM]; 3],
+        t_max: &[f32; ROOM],
         n: usize,
     ) -> u64 {
         let mut blocked = 0u64;
-        let t_max = F::splat(1.0 - SHADOW_EPSILON);
         for first in (0..n).step_by(16) {
             let lanes = M::from_bits(if n - first >= 16 {
                 Bits::MAX
@@ -508,7 +529,7 @@ impl Wavefront<'_> {
                 &self.balls,
                 v(o),
                 v(d),
-                t_max,
+                F::load_at(t_max, first),
                 lanes,
             );
             blocked |= (b.bits() as u64) << first;
@@ -516,8 +537,8 @@ impl Wavefront<'_> {
         blocked
     }
 
-    /// Which of the `n` packed shadow rays are blocked, a bit a ray, by the scene's own
-    /// query ([`Trace::Scene`]): `spawn_ray_to`'s rays, clear up to 1 − `SHADOW_EPSILON`.
+    /// Which of the `n` packed shadow rays (clear up to `t_max`) are blocked, a bit a ray,
+    /// by the scene's own query ([`Trace::Scene`]).
     /// Those from paths' first vertices (bits of `first`), consecutive samples of a pixel
     /// towards the lights, sixteen to a packet (`Scene::occluded_origins`); the others
     /// together (`Scene::occluded_many`, interleaved where the scene outgrows the cache).
@@ -526,6 +547,7 @@ impl Wavefront<'_> {
         &self,
         o: &[[f32; ROOM]; 3],
         d: &[[f32; ROOM]; 3],
+        t_max: &[f32; ROOM],
         n: usize,
         first: u64,
         rays: &mut Vec<crate::geometry::Ray>,
@@ -534,22 +556,23 @@ impl Wavefront<'_> {
             let v = |a: &[[f32; ROOM]; 3]| glam::Vec3A::new(a[0][k], a[1][k], a[2][k]);
             crate::geometry::Ray::new(v(o), v(d))
         };
-        let t_max = [1.0 - SHADOW_EPSILON; ROOM];
         let mut blocked = 0u64;
         // Each part's rays in packed order, and where each sits among them.
         let mut traced = |part: u64, rays: &mut Vec<crate::geometry::Ray>, packets: bool| {
             let mut at = [0usize; ROOM];
+            let mut t = [0f32; ROOM];
             rays.clear();
             for (j, k) in crate::simd::lanes_of64(part).enumerate() {
                 at[j] = k;
+                t[j] = t_max[k];
                 rays.push(ray(k));
             }
             let m = rays.len();
             let mut out = [false; ROOM];
             if packets {
-                self.scene.occluded_origins(rays, &t_max[..m], &mut out[..m]);
+                self.scene.occluded_origins(rays, &t[..m], &mut out[..m]);
             } else {
-                self.scene.occluded_many(rays, &t_max[..m], &mut out[..m]);
+                self.scene.occluded_many(rays, &t[..m], &mut out[..m]);
             }
             for j in 0..m {
                 blocked |= (out[j] as u64) << at[j];

@@ -21,6 +21,13 @@ impl V3 {
         self.y.store(&mut a[1]);
         self.z.store(&mut a[2]);
     }
+    /// The lanes, by component.
+    #[inline(always)]
+    pub fn to_arrays(self) -> [[f32; 16]; 3] {
+        let mut a = [[0.0; 16]; 3];
+        self.store(&mut a);
+        a
+    }
     /// Lanes where all three components are finite.
     #[inline(always)]
     pub fn is_finite(self) -> M {
