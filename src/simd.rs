@@ -14,6 +14,8 @@
 //! compiled into their callers with the callers' target features (a call would lose them).
 
 #[cfg(target_arch = "x86_64")]
+pub(crate) mod avx;
+#[cfg(target_arch = "x86_64")]
 pub(crate) mod avx2;
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod avx512;

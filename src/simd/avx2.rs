@@ -1,9 +1,9 @@
 //! Sixteen f32 lanes in two AVX registers ([`F`]: lanes 0–7 in the first, 8–15 in the
-//! second), a [`Float`] of the lane types for CPUs without AVX-512, with the operations of
-//! [`super::avx512`]: each the IEEE operation the scalar code performs on one lane (no FMA,
-//! no reciprocal approximations), so a lane computes the bits that `f32` computes. A lane
-//! mask ([`M`]) is a vector mask (all ones in a set lane), as the comparisons give it and
-//! `blendv` takes it. Kept as bits, every comparison had taken two `movemask`s and a pack,
+//! second, each an [`F8`]), a [`Float`] of the lane types for CPUs without AVX-512, with the
+//! operations of [`super::avx512`]: each [`F8`]'s on both halves, the IEEE operation the
+//! scalar code performs on one lane (no FMA, no reciprocal approximations), so a lane
+//! computes the bits that `f32` computes. A lane mask ([`M`]) is a vector mask (all ones in
+//! a set lane), as the comparisons give it and `blendv` takes it. Kept as bits, every comparison had taken two `movemask`s and a pack,
 //! and every select a broadcast, an `and` and a compare a half, all on the dependency chains
 //! of the primitive tests (see docs/performance.md).
 //!
@@ -15,17 +15,18 @@
 //! PCG32, with AVX2), and the small scenes' brute force (`accel::flat`, after its kernel's
 //! detection).
 
+use super::avx::{F8, M8};
 use super::{Float, Sixteen};
 use std::arch::x86_64::*;
 use std::ops::{Add, BitAnd, BitAndAssign, BitOr, BitOrAssign, Div, Mul, Neg, Not, Sub};
 
 /// A mask of lanes: all ones in each lane set, all zeros in the others.
 #[derive(Clone, Copy)]
-pub struct M(pub [__m256; 2]);
+pub struct M(pub [M8; 2]);
 
 /// Sixteen f32 lanes.
 #[derive(Clone, Copy)]
-pub struct F(pub [__m256; 2]);
+pub struct F(pub [F8; 2]);
 
 // SAFETY (all the `unsafe` blocks of this module): the intrinsics need AVX, which every
 // caller has checked for (see the module comment); they touch no memory but the arrays
@@ -54,23 +55,21 @@ impl BitAnd for M {
     type Output = M;
     #[inline(always)]
     fn bitand(self, o: M) -> M {
-        M(both!(h => unsafe { _mm256_and_ps(self.0[h], o.0[h]) }))
+        M(both!(h => self.0[h] & o.0[h]))
     }
 }
 impl BitOr for M {
     type Output = M;
     #[inline(always)]
     fn bitor(self, o: M) -> M {
-        M(both!(h => unsafe { _mm256_or_ps(self.0[h], o.0[h]) }))
+        M(both!(h => self.0[h] | o.0[h]))
     }
 }
 impl Not for M {
     type Output = M;
     #[inline(always)]
     fn not(self) -> M {
-        M(both!(h => unsafe {
-            _mm256_xor_ps(self.0[h], _mm256_castsi256_ps(_mm256_set1_epi32(-1)))
-        }))
+        M(both!(h => !self.0[h]))
     }
 }
 impl BitAndAssign for M {
@@ -89,14 +88,13 @@ impl BitOrAssign for M {
 impl F {
     #[inline(always)]
     pub fn load(a: &[f32; 16]) -> F {
-        F(both!(h => unsafe { _mm256_loadu_ps(a.as_ptr().add(8 * h)) }))
+        F(both!(h => F8::load(&a[8 * h..])))
     }
     #[inline(always)]
     pub fn store(self, a: &mut [f32; 16]) {
-        unsafe {
-            _mm256_storeu_ps(a.as_mut_ptr(), self.0[0]);
-            _mm256_storeu_ps(a.as_mut_ptr().add(8), self.0[1]);
-        }
+        let (lo, hi) = a.split_at_mut(8);
+        self.0[0].store(lo);
+        self.0[1].store(hi);
     }
     #[inline(always)]
     pub fn to_array(self) -> [f32; 16] {
@@ -106,109 +104,69 @@ impl F {
     }
 }
 
+/// Every operation [`F8`]'s on each half.
 impl Float for F {
     type Mask = M;
     #[inline(always)]
     fn any(m: M) -> bool {
-        unsafe {
-            let o = _mm256_or_ps(m.0[0], m.0[1]);
-            _mm256_testz_ps(o, o) == 0
-        }
+        F8::any(m.0[0] | m.0[1])
     }
     #[inline(always)]
     fn splat(x: f32) -> F {
-        F([unsafe { _mm256_set1_ps(x) }; 2])
+        F([F8::splat(x); 2])
     }
     #[inline(always)]
     fn sqrt(self) -> F {
-        F(both!(h => unsafe { _mm256_sqrt_ps(self.0[h]) }))
+        F(both!(h => self.0[h].sqrt()))
     }
-    /// |x|: the sign bit cleared, as `f32::abs` and glam's `abs`.
     #[inline(always)]
     fn abs(self) -> F {
-        F(both!(h => unsafe {
-            _mm256_and_ps(self.0[h], _mm256_castsi256_ps(_mm256_set1_epi32(0x7fff_ffff)))
-        }))
+        F(both!(h => self.0[h].abs()))
     }
-    /// `f32::max` against a number `o` that is not NaN: `o` where `self` is NaN (x86's
-    /// `maxps` gives its second operand where either is NaN).
     #[inline(always)]
     fn max_num(self, o: F) -> F {
-        F(both!(h => unsafe { _mm256_max_ps(self.0[h], o.0[h]) }))
+        F(both!(h => self.0[h].max_num(o.0[h])))
     }
-    /// `f32::min` against a number `o` that is not NaN: `o` where `self` is NaN.
     #[inline(always)]
     fn min_num(self, o: F) -> F {
-        F(both!(h => unsafe { _mm256_min_ps(self.0[h], o.0[h]) }))
+        F(both!(h => self.0[h].min_num(o.0[h])))
     }
-    /// `x < o`, false for NaN.
     #[inline(always)]
     fn lt(self, o: F) -> M {
-        M(both!(h => unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(self.0[h], o.0[h]) }))
+        M(both!(h => self.0[h].lt(o.0[h])))
     }
-    /// `x <= o`, false for NaN.
     #[inline(always)]
     fn le(self, o: F) -> M {
-        M(both!(h => unsafe { _mm256_cmp_ps::<_CMP_LE_OQ>(self.0[h], o.0[h]) }))
+        M(both!(h => self.0[h].le(o.0[h])))
     }
-    /// `x > o`, false for NaN.
     #[inline(always)]
     fn gt(self, o: F) -> M {
-        M(both!(h => unsafe { _mm256_cmp_ps::<_CMP_GT_OQ>(self.0[h], o.0[h]) }))
+        M(both!(h => self.0[h].gt(o.0[h])))
     }
-    /// `x >= o`, false for NaN.
     #[inline(always)]
     fn ge(self, o: F) -> M {
-        M(both!(h => unsafe { _mm256_cmp_ps::<_CMP_GE_OQ>(self.0[h], o.0[h]) }))
+        M(both!(h => self.0[h].ge(o.0[h])))
     }
-    /// `x == o`, false for NaN.
     #[inline(always)]
     fn eq(self, o: F) -> M {
-        M(both!(h => unsafe { _mm256_cmp_ps::<_CMP_EQ_OQ>(self.0[h], o.0[h]) }))
+        M(both!(h => self.0[h].eq(o.0[h])))
     }
-    /// `a` where `m`, else `b`.
     #[inline(always)]
     fn select(m: M, a: F, b: F) -> F {
-        F(both!(h => unsafe { _mm256_blendv_ps(b.0[h], a.0[h], m.0[h]) }))
+        F(both!(h => F8::select(m.0[h], a.0[h], b.0[h])))
     }
-    /// `self.copysign(sign)`: the magnitude of `self` with the sign bit of `sign`.
     #[inline(always)]
     fn copysign(self, sign: F) -> F {
-        let m = self.abs();
-        F(both!(h => unsafe {
-            let bit = _mm256_castsi256_ps(_mm256_set1_epi32(i32::MIN));
-            _mm256_or_ps(m.0[h], _mm256_and_ps(sign.0[h], bit))
-        }))
+        F(both!(h => self.0[h].copysign(sign.0[h])))
     }
-    /// (n + 127)·2²³, exact in f32, is as an integer the bits of 2ⁿ (AVX's conversions
-    /// and float arithmetic: no AVX2 integer instruction).
     #[inline(always)]
     fn pow2i(self) -> F {
-        F(both!(h => unsafe {
-            let biased = _mm256_add_ps(self.0[h], _mm256_set1_ps(127.0));
-            _mm256_castsi256_ps(_mm256_cvtps_epi32(_mm256_mul_ps(
-                biased,
-                _mm256_set1_ps(8_388_608.0),
-            )))
-        }))
+        F(both!(h => self.0[h].pow2i()))
     }
-    /// The fields masked out with AVX's float `and`; the exponent field, as an integer,
-    /// converted exactly and scaled down by 2²³.
     #[inline(always)]
     fn frexp(self) -> (F, F) {
-        let m = F(both!(h => unsafe {
-            let fraction = _mm256_castsi256_ps(_mm256_set1_epi32(0x007f_ffff));
-            _mm256_or_ps(_mm256_and_ps(self.0[h], fraction), _mm256_set1_ps(1.0))
-        }));
-        let e = F(both!(h => unsafe {
-            let field = _mm256_castsi256_ps(_mm256_set1_epi32(0x7f80_0000));
-            let biased = _mm256_cvtepi32_ps(_mm256_castps_si256(_mm256_and_ps(self.0[h], field)));
-            _mm256_sub_ps(
-                _mm256_mul_ps(biased, _mm256_set1_ps(1.0 / 8_388_608.0)),
-                _mm256_set1_ps(127.0),
-            )
-        }));
-        (m, e)
+        let [(m0, e0), (m1, e1)] = both!(h => self.0[h].frexp());
+        (F([m0, m1]), F([e0, e1]))
     }
 }
 
@@ -223,7 +181,7 @@ impl Sixteen for F {
     }
     #[inline(always)]
     fn bits(m: M) -> u32 {
-        unsafe { _mm256_movemask_ps(m.0[0]) as u32 | (_mm256_movemask_ps(m.0[1]) as u32) << 8 }
+        F8::bits(m.0[0]) | F8::bits(m.0[1]) << 8
     }
     #[inline(always)]
     fn iota(first: f32) -> F {
@@ -234,13 +192,13 @@ impl Sixteen for F {
                 _mm256_setr_ps(8., 9., 10., 11., 12., 13., 14., 15.),
             ]
         };
-        F(both!(h => unsafe { _mm256_add_ps(i[h], f) }))
+        F(both!(h => F8(unsafe { _mm256_add_ps(i[h], f) })))
     }
     /// Halved three times: each lane against the lane half a register away.
     #[inline(always)]
     fn min_by_key(t: F, key: F) -> (f32, f32) {
         unsafe {
-            let (t, k) = least(t.0[0], key.0[0], t.0[1], key.0[1]);
+            let (t, k) = least(t.0[0].0, key.0[0].0, t.0[1].0, key.0[1].0);
             let (t, k) = least(
                 t,
                 k,
@@ -283,37 +241,34 @@ impl Add for F {
     type Output = F;
     #[inline(always)]
     fn add(self, o: F) -> F {
-        F(both!(h => unsafe { _mm256_add_ps(self.0[h], o.0[h]) }))
+        F(both!(h => self.0[h] + o.0[h]))
     }
 }
 impl Sub for F {
     type Output = F;
     #[inline(always)]
     fn sub(self, o: F) -> F {
-        F(both!(h => unsafe { _mm256_sub_ps(self.0[h], o.0[h]) }))
+        F(both!(h => self.0[h] - o.0[h]))
     }
 }
 impl Mul for F {
     type Output = F;
     #[inline(always)]
     fn mul(self, o: F) -> F {
-        F(both!(h => unsafe { _mm256_mul_ps(self.0[h], o.0[h]) }))
+        F(both!(h => self.0[h] * o.0[h]))
     }
 }
 impl Div for F {
     type Output = F;
     #[inline(always)]
     fn div(self, o: F) -> F {
-        F(both!(h => unsafe { _mm256_div_ps(self.0[h], o.0[h]) }))
+        F(both!(h => self.0[h] / o.0[h]))
     }
 }
 impl Neg for F {
     type Output = F;
-    /// The sign bit flipped, as Rust's `-x` and glam's `neg`.
     #[inline(always)]
     fn neg(self) -> F {
-        F(both!(h => unsafe {
-            _mm256_xor_ps(self.0[h], _mm256_castsi256_ps(_mm256_set1_epi32(i32::MIN)))
-        }))
+        F(both!(h => -self.0[h]))
     }
 }

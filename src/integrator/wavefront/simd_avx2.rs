@@ -13,6 +13,7 @@
 
 use super::super::LaneMask;
 use crate::sampler::Uint;
+use crate::simd::avx::{F8, M8};
 use crate::simd::avx2::both;
 pub use crate::simd::avx2::{F, M};
 use crate::simd::Float;
@@ -30,20 +31,20 @@ pub struct U(pub [__m256i; 2]);
 /// Two halves' comparison results as a mask.
 #[inline(always)]
 fn mask_of(c: [__m256; 2]) -> M {
-    M(c)
+    M([M8(c[0]), M8(c[1])])
 }
 
 /// Half `h` of `m` as integer lanes.
 #[inline(always)]
 fn lanes_of(m: M, h: usize) -> __m256i {
-    unsafe { _mm256_castps_si256(m.0[h]) }
+    unsafe { _mm256_castps_si256(m.0[h].0) }
 }
 
 impl LaneMask for M {
     #[inline(always)]
     fn bits(self) -> u16 {
         unsafe {
-            (_mm256_movemask_ps(self.0[0]) as u32 | (_mm256_movemask_ps(self.0[1]) as u32) << 8)
+            (_mm256_movemask_ps(self.0[0].0) as u32 | (_mm256_movemask_ps(self.0[1].0) as u32) << 8)
                 as u16
         }
     }
@@ -53,7 +54,7 @@ impl LaneMask for M {
         M(both!(h => unsafe {
             let bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
             let b = _mm256_set1_epi32(((m >> (8 * h)) & 0xff) as i32);
-            _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(b, bits), bits))
+            M8(_mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(b, bits), bits)))
         }))
     }
     #[inline(always)]
@@ -65,7 +66,7 @@ impl LaneMask for M {
 impl F {
     #[inline(always)]
     pub fn is_nan(self) -> M {
-        mask_of(both!(h => unsafe { _mm256_cmp_ps::<_CMP_UNORD_Q>(self.0[h], self.0[h]) }))
+        mask_of(both!(h => unsafe { _mm256_cmp_ps::<_CMP_UNORD_Q>(self.0[h].0, self.0[h].0) }))
     }
     /// Lanes where x is finite (neither infinite nor NaN).
     #[inline(always)]
@@ -77,10 +78,10 @@ impl F {
     #[inline(always)]
     pub fn next_up(self) -> F {
         F(both!(h => unsafe {
-            _mm256_castsi256_ps(_mm256_add_epi32(
-                _mm256_castps_si256(self.0[h]),
+            F8(_mm256_castsi256_ps(_mm256_add_epi32(
+                _mm256_castps_si256(self.0[h].0),
                 _mm256_set1_epi32(1),
-            ))
+            )))
         }))
     }
     /// `a[at..at + 16]`.
@@ -109,7 +110,7 @@ impl F {
     pub fn lookup64(table: &[f32; 64], idx: U) -> F {
         F(both!(h => unsafe {
             // (An index below 64 reads inside the table.)
-            _mm256_i32gather_ps::<4>(table.as_ptr(), _mm256_and_si256(idx.0[h], _mm256_set1_epi32(63)))
+            F8(_mm256_i32gather_ps::<4>(table.as_ptr(), _mm256_and_si256(idx.0[h], _mm256_set1_epi32(63))))
         }))
     }
 }
@@ -185,7 +186,7 @@ impl U {
     /// signed conversion is the unsigned one).
     #[inline(always)]
     pub fn to_f32(self) -> F {
-        F(both!(h => unsafe { _mm256_cvtepi32_ps(self.0[h]) }))
+        F(both!(h => F8(unsafe { _mm256_cvtepi32_ps(self.0[h]) })))
     }
 }
 
@@ -251,7 +252,7 @@ impl U {
     /// The lanes' bits as f32.
     #[inline(always)]
     pub fn to_bits_f32(self) -> F {
-        F(both!(h => unsafe { _mm256_castsi256_ps(self.0[h]) }))
+        F(both!(h => F8(unsafe { _mm256_castsi256_ps(self.0[h]) })))
     }
 }
 
@@ -283,7 +284,7 @@ pub fn pcg32(state: &mut [u64; 16], inc: &[u64; 16], m: M) -> U {
             );
             let new = _mm256_add_epi64(_mm256_add_epi64(lo, _mm256_slli_epi64::<32>(cross)), inc);
             // This quarter's four lanes of `m`, each widened to 64 bits.
-            let half = _mm256_castps_si256(m.0[q / 2]);
+            let half = _mm256_castps_si256(m.0[q / 2].0);
             let four = if q % 2 == 0 {
                 _mm256_castsi256_si128(half)
             } else {
