@@ -309,9 +309,10 @@ impl Wavefront<'_> {
         let side = F::select(clear | front, one, F::splat(-1.0));
         let colour = sf.colour;
 
-        // Next-event estimation at the non-specular (Lambertian and rough) vertices: with one
-        // light sample, its shadow ray and the two values `l += β·lit` can add (β times the
-        // sample's contribution, or β·0 if it is blocked) wait for `shadows`.
+        // Next-event estimation at the non-specular vertices (Lambertian, rough, and general
+        // materials with a non-delta lobe): with one light sample, its shadow ray and the
+        // two values `l += β·lit` can add (β times the sample's contribution, or β·0 if it
+        // is blocked) wait for `shadows`.
         let non_delta = lambert | metal | frosted | general.as_ref().map_or(M::none(), |g| g.glossy);
         // (Without lights, `PathState::step` samples none and draws no numbers for them.)
         let nee = if self.scene.lights.is_empty() {
