@@ -684,16 +684,28 @@ fn rough_materials_both_ways() {
     if !cpu_runs_it() {
         return;
     }
-    use mcrt::integrator::RussianRoulette;
     let smooth = rough_materials() + &smooth_ball([0.0, 1.7, -1.2], 0.3, "mirror2", 6, 10);
-    for (k, (text, brute, hide, rr)) in [
-        (rough_materials(), true, false, None),
-        (rough_materials(), true, true, Some(0.6)),
-        (smooth, false, false, None),
-    ]
-    .into_iter()
-    .enumerate()
-    {
+    cases_both_ways(
+        "rough materials",
+        [
+            (rough_materials(), true, false, None),
+            (rough_materials(), true, true, Some(0.6)),
+            (smooth, false, false, None),
+        ],
+        70,
+    );
+}
+
+/// Each of `cases` (scene text, whether brute force traces it, hidden emitters, a fixed
+/// roulette's survival) rendered at 39×31, 4 spp, seed `seed` + its index, both ways; each
+/// image lit.
+fn cases_both_ways<const N: usize>(
+    what: &str,
+    cases: [(String, bool, bool, Option<f32>); N],
+    seed: u64,
+) {
+    use mcrt::integrator::RussianRoulette;
+    for (k, (text, brute, hide, rr)) in cases.into_iter().enumerate() {
         let scene = scene_from(&hiding_emitters(&text, hide));
         let mut s = settings(
             &scene,
@@ -701,7 +713,7 @@ fn rough_materials_both_ways() {
                 width: Some(39),
                 height: Some(31),
                 spp: Some(4),
-                seed: Some(70 + k as u64),
+                seed: Some(seed + k as u64),
                 ..Default::default()
             },
         );
@@ -709,8 +721,11 @@ fn rough_materials_both_ways() {
             s.params.rr = RussianRoulette::Fixed(q);
         }
         let w = Wavefront::new(&scene, &s);
-        assert!(w.is_some_and(|w| w.is_brute_force() == brute), "case {k}");
-        let what = format!("rough materials, brute force {brute}, hide {hide}, {rr:?}");
+        assert!(
+            w.is_some_and(|w| w.is_brute_force() == brute),
+            "{what}: case {k}"
+        );
+        let what = format!("{what}, brute force {brute}, hide {hide}, {rr:?}");
         let (film, _) = same_both_ways(scene, &s, &what);
         assert!(
             film.sum_f64().iter().flatten().sum::<f64>() > 0.0,
@@ -761,7 +776,6 @@ fn general_materials_both_ways() {
     if !cpu_runs_it() {
         return;
     }
-    use mcrt::integrator::RussianRoulette;
     let through = general_materials()
         .replace(
             "[material.dense]\ntype = \"thindielectric\"\nior = 1.6",
@@ -778,38 +792,16 @@ fn general_materials_both_ways() {
         )
         + &smooth_ball([0.0, 1.7, -1.2], 0.3, "brushed", 6, 10);
     assert!(through.contains("\"tiles\"\nvertices") && through.contains("\"blend\""));
-    for (k, (text, brute, hide, rr)) in [
-        (general_materials(), true, false, None),
-        (general_materials(), true, true, Some(0.6)),
-        (through.clone(), false, false, None),
-        (through, false, true, Some(0.7)),
-    ]
-    .into_iter()
-    .enumerate()
-    {
-        let scene = scene_from(&hiding_emitters(&text, hide));
-        let mut s = settings(
-            &scene,
-            FileSettings {
-                width: Some(39),
-                height: Some(31),
-                spp: Some(4),
-                seed: Some(90 + k as u64),
-                ..Default::default()
-            },
-        );
-        if let Some(q) = rr {
-            s.params.rr = RussianRoulette::Fixed(q);
-        }
-        let w = Wavefront::new(&scene, &s);
-        assert!(w.is_some_and(|w| w.is_brute_force() == brute), "case {k}");
-        let what = format!("general materials, brute force {brute}, hide {hide}, {rr:?}");
-        let (film, _) = same_both_ways(scene, &s, &what);
-        assert!(
-            film.sum_f64().iter().flatten().sum::<f64>() > 0.0,
-            "{what}: lit"
-        );
-    }
+    cases_both_ways(
+        "general materials",
+        [
+            (general_materials(), true, false, None),
+            (general_materials(), true, true, Some(0.6)),
+            (through.clone(), false, false, None),
+            (through, false, true, Some(0.7)),
+        ],
+        90,
+    );
 }
 
 /// The feature scenes of `tests/data/toml` (point, spot, directional, sphere, disk, mesh and

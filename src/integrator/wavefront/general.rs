@@ -7,6 +7,7 @@
 //! wavefront integrator likewise runs one material kernel over the queue of the paths that
 //! hit it (`src/pbrt/wavefront/surfscatter.cpp`); here the queue is the lanes of a vector.
 
+use super::bsdf::Sample;
 use super::simd::{F, M, V3};
 use super::{Bits, LaneMask};
 use crate::material::{Material, TransportMode};
@@ -41,17 +42,6 @@ pub struct General<'a> {
     /// estimation there: `Material::is_specular` is false).
     pub glossy: M,
     materials: [Option<At<'a>>; 16],
-}
-
-/// The BSDF samples of a [`General`]'s lanes (`Material::sample` in radiance mode).
-pub struct Sample {
-    pub ok: M,
-    pub wi: V3,
-    pub weight: V3,
-    pub pdf: F,
-    pub eta: F,
-    /// The lanes whose sample is not a delta lobe's (MIS on the emitter it finds).
-    pub glossy: M,
 }
 
 impl<'a> General<'a> {
@@ -92,7 +82,8 @@ impl<'a> General<'a> {
     }
 
     /// `Material::sample` of each lane in `lanes`, for the local direction `wo` and the
-    /// numbers `[ux, uy, u1]` (the direction's pair and the lobe's choice).
+    /// numbers `[ux, uy, u1]` (the direction's pair and the lobe's choice); the other
+    /// lanes hold no sample.
     #[inline(always)]
     pub fn sample(&self, wo: V3, [ux, uy, u1]: [F; 3]) -> Sample {
         let wo = wo.to_arrays();
