@@ -300,15 +300,6 @@ impl CameraDesc {
         }
     }
 
-    /// Whether its rays leave the eye straight through the image plane (`Pinhole`,
-    /// `Perspective`): the rays [`Camera::is_pinhole`] says the lanes make.
-    pub fn is_pinhole(&self) -> bool {
-        matches!(
-            self,
-            CameraDesc::Pinhole { .. } | CameraDesc::Perspective { .. }
-        )
-    }
-
     pub fn build(&self, width: u32, height: u32) -> Camera {
         let aspect = width as f32 / height as f32;
         let (eye, tl, tr, bl, br, lens) = match *self {

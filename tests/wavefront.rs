@@ -804,6 +804,49 @@ fn general_materials_both_ways() {
     );
 }
 
+/// A thin lens's and an orthographic camera's rays, made by each lane's `Camera` (a thin
+/// lens's from a second pair of numbers), by brute force ([`SPECULAR`]) and through the
+/// scene (with a smooth mesh ball): the same film as one path at a time.
+#[test]
+fn cameras_both_ways() {
+    if !cpu_runs_it() {
+        return;
+    }
+    let perspective = "type = \"perspective\"\norigin = [0, 1.2, 2.8]\ntarget = [0, 0.9, 0]\nup = [0, 1, 0]\nfov = 75";
+    assert!(SPECULAR.contains(perspective));
+    let lens = "type = \"thinlens\"\norigin = [0, 1.2, 2.8]\ntarget = [0, 0.9, 0]\nup = [0, 1, 0]\nfov = 75\naperture_radius = 0.15\nfocus_distance = 2.5";
+    let ortho = "type = \"orthographic\"\norigin = [0, 1.2, 2.8]\ntarget = [0, 0.9, 0]\nup = [0, 1, 0]\nview_width = 3.5";
+    let ball = smooth_ball([0.0, 1.7, -1.2], 0.3, "white", 6, 10);
+    for (k, (camera, brute)) in [(lens, true), (ortho, true), (lens, false), (ortho, false)]
+        .into_iter()
+        .enumerate()
+    {
+        let mut text = SPECULAR.replace(perspective, camera);
+        if !brute {
+            text += &ball;
+        }
+        let scene = scene_from(&text);
+        let s = settings(
+            &scene,
+            FileSettings {
+                width: Some(37),
+                height: Some(29),
+                spp: Some(4),
+                seed: Some(130 + k as u64),
+                ..Default::default()
+            },
+        );
+        let w = Wavefront::new(&scene, &s);
+        assert!(w.is_some_and(|w| w.is_brute_force() == brute), "case {k}");
+        let what = format!("camera {}, brute force {brute}", &camera[..20]);
+        let (film, _) = same_both_ways(scene, &s, &what);
+        assert!(
+            film.sum_f64().iter().flatten().sum::<f64>() > 0.0,
+            "{what}: lit"
+        );
+    }
+}
+
 /// The feature scenes of `tests/data/toml` (point, spot, directional, sphere, disk, mesh and
 /// textured area lights, constant and bitmap environments; every BSDF, textured parameters,
 /// blends), which the lanes render through the scene's queries, asking `Lights` lane by lane

@@ -66,7 +66,7 @@ impl super::Integrator for PathTracer<'_> {
         stats: &mut RenderStats,
     ) -> bool {
         #[cfg(target_arch = "x86_64")]
-        if let Some(w) = self.wavefront.as_ref().filter(|_| camera.is_pinhole()) {
+        if let Some(w) = self.wavefront.as_ref() {
             w.render_tile(camera, pixels, sums, stats);
             return true;
         }

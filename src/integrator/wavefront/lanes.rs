@@ -34,7 +34,8 @@ pub(super) struct Lanes<S> {
     pub(super) has_prev: Bits,
     /// Lanes whose path ended at the last step, their samples not yet on the film.
     pub(super) done: Bits,
-    /// Lanes whose ray is their camera ray, not yet traced (from the camera's eye).
+    /// Lanes whose ray is their camera ray from a pinhole, not yet traced (from the
+    /// camera's eye).
     pub(super) fresh: Bits,
     /// The shadow rays of the last step's light samples, waiting to be traced.
     pub(super) shadow: Shadows,
@@ -256,8 +257,11 @@ impl Wavefront<'_> {
     }
 
     lanes_fn! {
-    /// Camera rays for the lanes of `fresh` (`Camera::generate_ray` with the sample's first
-    /// request), and their paths' initial state.
+    /// Camera rays for the lanes of `fresh` (`Camera::sample_ray`: the pixel offset the
+    /// sample's first request, a thin lens's point the second), and their paths' initial
+    /// state. A pinhole's rays are made in the lanes and marked fresh: they share the eye,
+    /// so `trace_groups` traces them as packets. Other cameras' are each lane's
+    /// `Camera::generate_ray` or `generate_ray_lens`.
     #[inline]
     unsafe fn start<S: LaneSampler + Clone>(
         &self,
@@ -269,20 +273,45 @@ impl Wavefront<'_> {
     ) {
         let fresh = M::from_bits(bits);
         let [ux, uy] = st.rng.next::<2>(fresh);
-        let s = (F::load(px) + ux) / F::splat(cam.width as f32);
-        let t = (F::load(py) + uy) / F::splat(cam.height as f32);
-        let p: V3 = cam.plane_point_lanes(s, t);
-        let eye = V3::broadcast(cam.eye);
-        let d = (p - eye).normalize();
+        let (o, d) = if cam.is_pinhole() {
+            let s = (F::load(px) + ux) / F::splat(cam.width as f32);
+            let t = (F::load(py) + uy) / F::splat(cam.height as f32);
+            let p: V3 = cam.plane_point_lanes(s, t);
+            let eye = V3::broadcast(cam.eye);
+            st.fresh |= bits;
+            (eye, (p - eye).normalize())
+        } else {
+            // (No closures here: they would be compiled without the lanes' features.)
+            let lens = if cam.samples_lens() {
+                let [lx, ly] = st.rng.next::<2>(fresh);
+                Some((lx.to_array(), ly.to_array()))
+            } else {
+                None
+            };
+            let (ux, uy) = (ux.to_array(), uy.to_array());
+            let (mut o, mut d) = ([[0f32; 16]; 3], [[0f32; 16]; 3]);
+            for l in lanes_of(u32::from(bits)) {
+                let (x, y, u) = (px[l] as u32, py[l] as u32, glam::Vec2::new(ux[l], uy[l]));
+                let ray = match &lens {
+                    Some((lx, ly)) => {
+                        cam.generate_ray_lens(x, y, u, glam::Vec2::new(lx[l], ly[l]))
+                    }
+                    None => cam.generate_ray(x, y, u),
+                };
+                for a in 0..3 {
+                    (o[a][l], d[a][l]) = (ray.o[a], ray.d[a]);
+                }
+            }
+            (V3::load(&o), V3::load(&d))
+        };
         let keep = |a: &mut [[f32; 16]; 3], x: V3| V3::select(fresh, x, V3::load(a)).store(a);
-        keep(&mut st.o, eye);
+        keep(&mut st.o, o);
         keep(&mut st.d, d);
         keep(&mut st.beta, V3::splat([1.0; 3]));
         keep(&mut st.l, V3::zero());
         F::select(fresh, F::splat(1.0), F::load(&st.eta2)).store(&mut st.eta2);
         U::select(fresh, U::splat(0), U::load(&st.depth)).store(&mut st.depth);
         st.has_prev &= !bits;
-        st.fresh |= bits;
         st.active |= bits;
     }
     }

@@ -40,8 +40,9 @@
 //! branch (what is still the lanes' own: the brute-force traversal, the material dispatch by
 //! masks, the roulette).
 //!
-//! The scenes it takes ([`Wavefront::new`]): any material, any lights; a pinhole or
-//! perspective camera; the `path` integrator, any number of shadow rays where the one light
+//! The scenes it takes ([`Wavefront::new`]): any material, any lights, any camera (a
+//! pinhole's rays made in the lanes, the others' by each lane's `Camera`); the `path`
+//! integrator, any number of shadow rays where the one light
 //! is a triangle or a parallelogram of constant radiance and every material Lambertian,
 //! mirror or smooth glass (else one; with AVX2 always one), either sampler. One such planar
 //! light the lanes sample in their registers; any other lights (several, spheres, meshes,
@@ -426,14 +427,6 @@ impl<'a> Wavefront<'a> {
         // wavefront`, Figure 3.3 at 250²: 0.48 s against 0.44 s, one thread), so it is left
         // to the path tracer there.
         if backend == Backend::Avx2 && p.shadow_rays > 1 {
-            return None;
-        }
-        // The lanes make pinhole rays (`Lanes::start`); a thin lens's and an orthographic
-        // camera's rays are the path tracer's.
-        if scene
-            .camera(s.camera.as_deref())
-            .is_some_and(|c| !c.is_pinhole())
-        {
             return None;
         }
         let planar = scene.lights.single_planar();
