@@ -42,9 +42,9 @@
 //!
 //! The scenes it takes ([`Wavefront::new`]): any material, any lights, any camera (a
 //! pinhole's rays made in the lanes, the others' by each lane's `Camera`); the `path`
-//! integrator, any number of shadow rays where the one light
-//! is a triangle or a parallelogram of constant radiance and every material Lambertian,
-//! mirror or smooth glass (else one; with AVX2 always one), either sampler. One such planar
+//! integrator, any number of shadow rays where the one light is a triangle or a
+//! parallelogram of constant radiance and every material Lambertian, mirror or smooth glass
+//! (else one; with AVX2 always one), either sampler. One such planar
 //! light the lanes sample in their registers; any other lights (several, spheres, meshes,
 //! textured, point, spot, directional, environments) each lane asks of `Lights`, a lane at a
 //! time, with the path tracer's own functions ([`lights`]), and those scenes are traced
@@ -54,9 +54,10 @@
 //! each hit as `Scene::material_at` does, so not with brute force; a rough material's not),
 //! with no normal or bump map; every other material (`GENERAL`: the plastics, principled,
 //! Oren–Nayar, smooth conductors, blends, maps, textured roughness) by calling each lane's
-//! `Material` ([`general`]), which brute force takes where it is the same at every hit. Every scene of the benchmark is such a scene. Other cameras,
-//! integrators and light batches, and any CPU without AVX2, BMI1, BMI2 and POPCNT, render
-//! with the stream ([`super::stream`]) or `path::li`.
+//! `Material` ([`general`]), which brute force takes where it is the same at every hit.
+//! Every scene of the benchmark is such a scene. Other integrators and light batches, and
+//! any CPU without AVX2, BMI1, BMI2 and POPCNT, render with the stream ([`super::stream`])
+//! or `path::li`.
 //!
 //! The lanes' code is written once over a small SIMD type of sixteen lanes and compiled
 //! twice ([`Backend`]): in one AVX-512 register ([`avx512`]) and in two AVX2 registers
