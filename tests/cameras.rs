@@ -262,12 +262,12 @@ fn toml_thinlens_and_orthographic_cameras() {
     assert_eq!(tl.d, Vec3A::new(0.0, 0.0, -1.0));
 }
 
-/// The wavefront's lanes make pinhole rays only: it takes the Cornell box with its own
-/// camera, and declines it with a thin lens or an orthographic camera (whose samples the
-/// path tracer renders one at a time; a forced wide backend is refused).
+/// The wavefront takes the Cornell box with a thin lens or an orthographic camera too
+/// (their rays made by each lane's `Camera`), and renders it with the path tracer's bits,
+/// forced to either backend (`tests/wavefront.rs` compares every backend on more scenes).
 #[cfg(target_arch = "x86_64")]
 #[test]
-fn the_wavefront_declines_lens_and_orthographic_cameras() {
+fn the_wavefront_takes_lens_and_orthographic_cameras() {
     use mcrt::integrator::wavefront::Wavefront;
     use mcrt::render::Backend;
     use mcrt::scene::desc::FileSettings;
@@ -300,12 +300,18 @@ fn the_wavefront_declines_lens_and_orthographic_cameras() {
     ] {
         desc.cameras = vec![("main".into(), cam)];
         let scene = Scene::build(desc.clone());
-        assert!(Wavefront::new(&scene, &s).is_none());
-        let forced = mcrt::render::RenderSettings {
-            backend: Backend::Avx2,
+        assert!(Wavefront::new(&scene, &s).is_some());
+        let with = |backend| mcrt::render::RenderSettings {
+            backend,
             ..s.clone()
         };
-        assert!(mcrt::render::render(&scene, &forced, &|_| {}).is_err());
-        assert!(mcrt::render::render(&scene, &s, &|_| {}).is_ok());
+        let (one, _) = mcrt::render::render(&scene, &with(Backend::Scalar), &|_| {}).unwrap();
+        let (wide, _) = mcrt::render::render(&scene, &s, &|_| {}).unwrap();
+        assert!(one.sum_f64().iter().flatten().sum::<f64>() > 0.0, "lit");
+        assert_eq!(wide.sum, one.sum, "the wavefront's film");
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            let (avx2, _) = mcrt::render::render(&scene, &with(Backend::Avx2), &|_| {}).unwrap();
+            assert_eq!(avx2.sum, one.sum, "the AVX2 backend's film");
+        }
     }
 }
