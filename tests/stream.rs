@@ -89,8 +89,13 @@ fn over() -> FileSettings {
 /// wavefront does not take, with `auto`; `scalar` leaves the tiles to the render loop.
 #[test]
 fn the_stream_takes_the_tiles() {
-    let scene = feature("cameras"); // a thin lens: never the wavefront
-    let s = settings(&scene, over(), 1);
+    // Two light samples a vertex under two lights: never the wavefront (its several light
+    // samples are the one planar light's batch).
+    let scene = feature("cameras");
+    let mut s = settings(&scene, over(), 1);
+    s.params.shadow_rays = 2;
+    #[cfg(target_arch = "x86_64")]
+    assert!(mcrt::integrator::wavefront::Wavefront::new(&scene, &s).is_none());
     let pixels: Vec<TilePixel> = (0..4)
         .map(|x| TilePixel {
             x,
