@@ -57,7 +57,8 @@ impl Wavefront<'_> {
         V3::load(&e)
     }
 
-    /// The emission seen at the hits of lanes `lanes` along their rays `d` (`emitted`).
+    /// The emission seen at the hits of lanes `lanes` (the caller's emitters) along their
+    /// rays `d` (`emitted`, which itself returns zero at a surface that emits nothing).
     #[inline(always)]
     pub(super) fn emitted_lanes(
         &self,
@@ -72,9 +73,6 @@ impl Wavefront<'_> {
             let Some(si) = hits[l].as_ref() else {
                 continue;
             };
-            if si.light == crate::scene::NO_LIGHT {
-                continue;
-            }
             let le = emitted(self.scene, si, lane(&d, l), prev.of(&pp, &ppdf, l), self.shadow_rays);
             (e[0][l], e[1][l], e[2][l]) = (le.x, le.y, le.z);
         }
