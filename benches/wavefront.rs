@@ -8,9 +8,7 @@
 //! Each row renders the scene at 128×128 (Figure 3.3's settings at 250×250) once per
 //! round each way, the two ways alternating; it prints the fastest and the median round of
 //! each and the ratio of the medians. (x86-64 with AVX2 and BMI2, and AVX-512 where the CPU
-//! has it; elsewhere the wavefront never runs and there is nothing to compare. With AVX2
-//! alone the wavefront declines several shadow rays a vertex: Figure 3.3's row then times
-//! the path tracer both ways.)
+//! has it; elsewhere the wavefront never runs and there is nothing to compare.)
 
 fn main() {
     #[cfg(target_arch = "x86_64")]

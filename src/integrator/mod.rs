@@ -50,7 +50,7 @@ use crate::Color;
 use glam::Vec3A;
 #[cfg(target_arch = "x86_64")]
 pub(crate) use nee::lattice_v;
-pub(crate) use nee::{one_light, sample_lights};
+pub(crate) use nee::{one_light, sample_lights, sample_lights_at};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum IntegratorKind {

@@ -78,7 +78,23 @@ pub(crate) fn sample_lights(
     sampler: &mut crate::sampler::Sampler,
     stats: &mut RayStats,
 ) -> Color {
-    let delta = sampler.next_3d();
+    sample_lights_at(scene, si, frame, wo, material, n, sampler.next_3d(), stats)
+}
+
+/// [`sample_lights`] for the sampler's numbers `delta` (the wavefront's lanes draw their
+/// own).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn sample_lights_at(
+    scene: &Scene,
+    si: &Interaction,
+    frame: &Frame,
+    wo: Vec3A,
+    material: &Material,
+    n: u32,
+    delta: [f32; 3],
+    stats: &mut RayStats,
+) -> Color {
     match scene.lights.single_planar() {
         // One sample gains nothing from lanes; it takes the general path, as it always did.
         Some(light) if n > 1 => {

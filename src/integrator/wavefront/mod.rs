@@ -41,23 +41,23 @@
 //! masks, the roulette).
 //!
 //! The scenes it takes ([`Wavefront::new`]): any material, any lights, any camera (a
-//! pinhole's rays made in the lanes, the others' by each lane's `Camera`); the `path`
-//! integrator, any number of shadow rays where the one light is a triangle or a
-//! parallelogram of constant radiance and every material Lambertian, mirror or smooth glass
-//! (else one; with AVX2 always one), either sampler. One such planar
-//! light the lanes sample in their registers; any other lights (several, spheres, meshes,
-//! textured, point, spot, directional, environments) each lane asks of `Lights`, a lane at a
-//! time, with the path tracer's own functions ([`lights`]), and those scenes are traced
-//! through the scene's queries. The lanes shade in their registers the Lambertian, mirror,
-//! smooth glass, rough conductor and rough glass (Beckmann or GGX, isotropic or not; glass
-//! of unit factors) and black materials, their colours constant or textured (looked up at
-//! each hit as `Scene::material_at` does, so not with brute force; a rough material's not),
-//! with no normal or bump map; every other material (`GENERAL`: the plastics, principled,
-//! Oren–Nayar, smooth conductors, blends, maps, textured roughness) by calling each lane's
-//! `Material` ([`general`]), which brute force takes where it is the same at every hit.
-//! Every scene of the benchmark is such a scene. Other integrators and light batches, and
-//! any CPU without AVX2, BMI1, BMI2 and POPCNT, render with the stream ([`super::stream`])
-//! or `path::li`.
+//! pinhole's rays made in the lanes, the others' by each lane's `Camera`), either sampler;
+//! the `path` integrator with any number of light samples a vertex. One planar light (a
+//! triangle or a parallelogram of constant radiance) the lanes sample in their registers,
+//! and with several samples a vertex at Lambertian vertices as the planar batch does
+//! ([`nee`]); any other lights (several, spheres, meshes, textured, point, spot,
+//! directional, environments) each lane asks of `Lights`, a lane at a time, with the path
+//! tracer's own functions ([`lights`]), and those scenes are traced through the scene's
+//! queries; several samples a vertex anywhere else are each lane's own call of the path
+//! tracer's next-event estimation (`Wavefront::several`). The lanes shade in their
+//! registers the Lambertian, mirror, smooth glass, rough conductor and rough glass
+//! (Beckmann or GGX, isotropic or not; glass of unit factors) and black materials, their
+//! colours constant or textured (looked up at each hit as `Scene::material_at` does, so
+//! not with brute force; a rough material's not), with no normal or bump map; every other
+//! material (`GENERAL`: the plastics, principled, Oren–Nayar, smooth conductors, blends,
+//! maps, textured roughness) by calling each lane's `Material` ([`general`]), which brute
+//! force takes where it is the same at every hit. Other integrators, and any CPU without
+//! AVX2, BMI1, BMI2 and POPCNT, render with the stream ([`super::stream`]) or `path::li`.
 //!
 //! The lanes' code is written once over a small SIMD type of sixteen lanes and compiled
 //! twice ([`Backend`]): in one AVX-512 register ([`avx512`]) and in two AVX2 registers
@@ -423,26 +423,15 @@ impl<'a> Wavefront<'a> {
         if p.kind != IntegratorKind::Path || p.max_depth == Some(0) || p.shadow_rays == 0 {
             return None;
         }
-        // Several light samples a vertex are traced as each lane's packets, one group at a
-        // time: with AVX2 that was slower than one path at a time (`cargo bench --bench
-        // wavefront`, Figure 3.3 at 250²: 0.48 s against 0.44 s, one thread), so it is left
-        // to the path tracer there.
-        if backend == Backend::Avx2 && p.shadow_rays > 1 {
-            return None;
-        }
         let planar = scene.lights.single_planar();
-        // (Several light samples a vertex are the planar batch's.)
-        if planar.is_none() && p.shadow_rays > 1 {
-            return None;
-        }
         let materials: Vec<Shading> = scene.materials.iter().map(Shading::of).collect();
-        // (Several light samples a vertex, the planar batch's, are Lambertian only.)
+        // Several light samples a vertex at other than Lambertian vertices under one planar
+        // light (the planar batch's) are each lane's `sample_lights_at`, which reads the
+        // lane's hit: not by brute force.
         let glossy = materials
             .iter()
             .any(|m| matches!(m.flags & KIND, ROUGH | ROUGH_GLASS | GENERAL));
-        if glossy && p.shadow_rays > 1 {
-            return None;
-        }
+        let own_batch = p.shadow_rays == 1 || !glossy;
         let resolved = (scene.materials.iter().zip(&materials))
             .map(|(m, sh)| {
                 (sh.flags & KIND == GENERAL && !sh.textured)
@@ -489,7 +478,7 @@ impl<'a> Wavefront<'a> {
             width: s.width,
             backend,
         };
-        if w.fill_tables() {
+        if own_batch && w.fill_tables() {
             w.trace = Trace::Lanes;
         } else {
             (w.tris, w.balls) = (Vec::new(), Vec::new());

@@ -6,7 +6,7 @@
 //! computed sixteen lanes at a time and each lane's shadow rays traced as its own packets.
 
 use super::bsdf::{flip_z, Microfacets};
-use super::general::General;
+use super::general::{lane, General};
 use super::lights::Incident;
 use super::simd::{F, M, V3};
 use super::{Bits, LaneMask, Light, Wavefront};
@@ -14,7 +14,7 @@ use crate::accel::{RayPacket, PACKET};
 use crate::geometry::ray::{offset_by, offset_push, offset_ray_origin, SHADOW_EPSILON};
 use crate::geometry::Frame;
 use crate::integrator::nee::{lambert_weight, shadow_dir, wrap};
-use crate::integrator::RayStats;
+use crate::integrator::{sample_lights_at, RayStats};
 use crate::light::{planar_point, towards};
 use crate::material::lambert;
 use crate::material::{rough_dielectric, TransportMode};
@@ -184,6 +184,46 @@ impl Wavefront<'_> {
         let sum = (acc[0] + acc[1]) + (acc[2] + acc[3]);
         let e = (v.albedo.scale(F::splat(FRAC_1_PI)) * V3::splat(lt.radiance)).scale(sum);
         V3::select(lanes, e.div(F::splat(nf)), V3::zero())
+    }
+}
+
+impl Wavefront<'_> {
+    /// The light's contribution with `n` > 1 light samples a vertex at the vertices of
+    /// lanes `lanes` (the hits in `hits`: [`super::Trace::Scene`]) that the planar batch does
+    /// not take (other lights, other materials): each lane's `sample_lights_at`, the path
+    /// tracer's own next-event estimation for the lane's numbers `[du, dv, dw]`, its shadow
+    /// rays traced as it traces them. Zero in the other lanes.
+    #[inline(always)]
+    pub(super) fn several(
+        &self,
+        v: &Vertex,
+        hits: &[Option<crate::scene::Interaction>; 16],
+        lanes: M,
+        [du, dv, dw]: [F; 3],
+        stats: &mut RayStats,
+    ) -> V3 {
+        let (du, dv, dw) = (du.to_array(), dv.to_array(), dw.to_array());
+        let wo = v.wo.to_arrays();
+        let mut e = [[0f32; 16]; 3];
+        for l in crate::simd::lanes_of(u32::from(lanes.bits())) {
+            let si = hits[l].as_ref().expect("a hit where a light is sampled");
+            // (`Scene::material_at`, as the path tracer finds it, where the lane has not
+            // already found it.)
+            let at;
+            let material = match v.general.and_then(|g| g.material(l)) {
+                Some(m) => m,
+                None => {
+                    at = self.scene.material_at(si);
+                    &at
+                }
+            };
+            let frame = Frame::from_normal(si.ns);
+            let delta = [du[l], dv[l], dw[l]];
+            let n = self.shadow_rays;
+            let c = sample_lights_at(self.scene, si, &frame, lane(&wo, l), material, n, delta, stats);
+            (e[0][l], e[1][l], e[2][l]) = (c.x, c.y, c.z);
+        }
+        V3::load(&e)
     }
 }
 

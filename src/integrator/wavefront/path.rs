@@ -347,7 +347,17 @@ impl Wavefront<'_> {
                 (beta * contribution).store(&mut sh.lit);
                 (beta * V3::zero()).store(&mut sh.dark);
             } else {
-                let lit = self.batch(&v, nee, u, &mut stats.rays);
+                // Several: the planar batch at Lambertian vertices under one planar light,
+                // each lane's own `sample_lights_at` at the others.
+                let planar = match self.light {
+                    Some(_) => nee & lambert,
+                    None => M::none(),
+                };
+                let lit = V3::select(
+                    planar,
+                    self.batch(&v, planar, u, &mut stats.rays),
+                    self.several(&v, &st.hits, nee & !planar, u, &mut stats.rays),
+                );
                 l = V3::select(nee, l + beta * lit, l);
                 st.shadow.nee = 0;
             }
