@@ -136,7 +136,7 @@ fn two_passes_equal_one() {
 
 /// The integrator compiled for x86-64-v3, which `integrator::li` chooses at run time where
 /// the CPU has AVX2 and FMA, gives the portable code's film bit for bit: the TNCG15 room with
-/// ten shadow rays (the packets and the planar light batch) and the Cornell box with one
+/// ten shadow rays (the lattice's samples, their packets) and the Cornell box with one
 /// (single shadow rays, one-sided BSDFs). On a CPU without those features both are the
 /// portable code, and the test checks nothing new.
 #[test]

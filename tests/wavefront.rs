@@ -482,7 +482,7 @@ fn tncg15_room_both_ways() {
     }
 }
 
-/// Several shadow rays a vertex (the planar batch) from a triangle light and from a
+/// Several shadow rays a vertex (the vertex's lattice) from a triangle light and from a
 /// parallelogram, with one-sided walls seen from behind; and Sobol points.
 #[test]
 fn shadow_ray_batches_both_ways() {
@@ -886,34 +886,33 @@ fn feature_scenes() -> Vec<std::path::PathBuf> {
     names
 }
 
-/// Several light samples a vertex where the planar batch does not take them (each lane
-/// calls the path tracer's own next-event estimation): the feature scenes' lights (2 and 17
-/// samples, across a packet of 16), rough conductors and rough glass under one planar light
-/// (whose Lambertian walls keep the lanes' batch) and the general materials, hidden
-/// emitters and a fixed roulette on some: the same film and shadow-ray count as one path
-/// at a time.
+/// Several light samples a vertex (the vertex's lattice, each sample's shadow ray traced):
+/// under the feature scenes' lights (2, 3 and 17 samples, across a packet of 16), and under
+/// one planar light with rough conductors, rough glass and the general materials by brute
+/// force and through the scene; hidden emitters and a fixed roulette on some: the same film
+/// and shadow-ray count as one path at a time.
 #[test]
 fn several_light_samples_both_ways() {
     if !cpu_runs_it() {
         return;
     }
     use mcrt::integrator::RussianRoulette;
-    let mut cases: Vec<(String, Scene)> = feature_scenes()
+    let mut cases: Vec<(String, Scene, bool)> = feature_scenes()
         .iter()
         .map(|p| {
-            (
-                p.display().to_string(),
-                Scene::build(mcrt::load_scene(p).unwrap()),
-            )
+            let scene = Scene::build(mcrt::load_scene(p).unwrap());
+            (p.display().to_string(), scene, false)
         })
         .collect();
-    for (what, text) in [
-        ("rough", rough_materials()),
-        ("general", general_materials()),
+    let ball = smooth_ball([0.0, 1.7, -1.2], 0.3, "white", 6, 10);
+    for (what, text, brute) in [
+        ("rough", rough_materials(), true),
+        ("general", general_materials(), true),
+        ("general, a mesh ball", general_materials() + &ball, false),
     ] {
-        cases.push((what.to_string(), scene_from(&text)));
+        cases.push((what.to_string(), scene_from(&text), brute));
     }
-    for (k, (what, scene)) in cases.into_iter().enumerate() {
+    for (k, (what, scene, brute)) in cases.into_iter().enumerate() {
         let hide = k % 2 == 1;
         let mut s = settings(
             &scene,
@@ -932,7 +931,7 @@ fn several_light_samples_both_ways() {
             s.params.rr = RussianRoulette::Fixed(0.7);
         }
         let w = Wavefront::new(&scene, &s);
-        assert!(w.is_some_and(|w| !w.is_brute_force()), "{what}");
+        assert!(w.is_some_and(|w| w.is_brute_force() == brute), "{what}");
         let what = format!(
             "{what}, {} light samples, hide {hide}",
             s.params.shadow_rays
@@ -1155,9 +1154,8 @@ fn declines_what_it_does_not_do() {
         let w = Wavefront::new(scene, &s);
         assert!(w.is_some_and(|w| !w.is_brute_force()), "{what}");
     };
-    // A second light, a sphere light, rough and general materials: through the scene, also
-    // with several shadow rays a vertex (each lane's own next-event estimation: it reads
-    // the lane's hit).
+    // A second light, a sphere light: through the scene, also with several shadow rays a
+    // vertex; rough and general materials by brute force either way.
     let two_lights = OPEN.to_string()
         + r#"
 [[shape]]
@@ -1183,7 +1181,7 @@ vertices = [[2, 0.1, 0], [2, 0.1, 1], [2, 1, 0]]
         s.params.shadow_rays = 2;
         let w = Wavefront::new(&scene, &s);
         assert!(
-            w.is_some_and(|w| !w.is_brute_force()),
+            w.is_some_and(|w| w.is_brute_force() == brute),
             "{what}, two shadow rays"
         );
     }

@@ -49,8 +49,8 @@ use crate::simd::{Float, Mask, Vector3};
 use crate::Color;
 use glam::Vec3A;
 #[cfg(target_arch = "x86_64")]
-pub(crate) use nee::lattice_v;
-pub(crate) use nee::{one_light, sample_lights, sample_lights_at};
+pub(crate) use nee::Lattice;
+pub(crate) use nee::{one_light, sample_lights};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum IntegratorKind {

@@ -13,23 +13,15 @@
 //! the light evenly rather than clump, which lowers the variance, and they cost one request
 //! instead of n. With n = 1 the only sample is Δ itself, as before.
 //!
-//! The shadow rays of a vertex share their origin and are traced as packets of up to sixteen
-//! ([`crate::accel::RayPacket`]). When the scene's only light is a triangle or a
-//! parallelogram (`Lights::single_planar`, the case of most test scenes and of the TNCG15
-//! room), the batch's samples, BSDF values and MIS weights are computed eight or four lanes at
-//! a time ([`planar`]), with everything the samples share (the light's offset, the material's
-//! side, a Lambertian BSDF's colour) worked out once per vertex.
-
-mod lanes;
-mod planar;
-
-#[cfg(target_arch = "x86_64")]
-pub(super) use planar::{lambert_weight, shadow_dir, wrap};
+//! The shadow rays of a vertex share their origin where the samples leave the surface on
+//! one side, and are then traced as packets of up to sixteen
+//! ([`crate::accel::RayPacket`]). The wavefront computes the same samples sixteen vertices
+//! at a time with this module's [`Lattice`] and the same operations in its lanes.
 
 use crate::accel::{RayPacket, PACKET};
 use crate::geometry::{Frame, Ray};
 use crate::material::sampling::power_heuristic;
-use crate::material::{Bsdf, Material};
+use crate::material::Material;
 use crate::scene::{Interaction, Scene};
 use crate::Color;
 use glam::Vec3A;
@@ -45,23 +37,15 @@ const BATCH: usize = PACKET;
 const G1: u32 = 0x9e37_79b9;
 const G2: u32 = 0xc13f_a9a9;
 
-/// The lattice's second coordinate for sample `j` of a vertex: frac(j·(φ − 1)) to 24 bits,
-/// repeating after 256 samples (as the batch's table has it).
-#[inline]
-#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))] // (read by the wavefront)
-pub(crate) fn lattice_v(j: u32) -> f32 {
-    ((j % 256).wrapping_mul(G1) >> 8) as f32 * (1.0 / 16_777_216.0)
-}
-
 /// Δ in 32-bit fixed point; the sampler's numbers are multiples of 2⁻²⁴, so this is exact.
 #[inline(always)]
-fn fixed(x: f32) -> u32 {
+pub(crate) fn fixed(x: f32) -> u32 {
     (x * 4_294_967_296.0) as u32
 }
 
 /// Back to [0, 1): the top 24 bits, exactly representable.
 #[inline(always)]
-fn unit(x: u32) -> f32 {
+pub(crate) fn unit(x: u32) -> f32 {
     (x >> 8) as f32 * (1.0 / 16_777_216.0)
 }
 
@@ -78,52 +62,11 @@ pub(crate) fn sample_lights(
     sampler: &mut crate::sampler::Sampler,
     stats: &mut RayStats,
 ) -> Color {
-    sample_lights_at(scene, si, frame, wo, material, n, sampler.next_3d(), stats)
-}
-
-/// [`sample_lights`] for the sampler's numbers `delta` (the wavefront's lanes draw their
-/// own).
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn sample_lights_at(
-    scene: &Scene,
-    si: &Interaction,
-    frame: &Frame,
-    wo: Vec3A,
-    material: &Material,
-    n: u32,
-    delta: [f32; 3],
-    stats: &mut RayStats,
-) -> Color {
-    match scene.lights.single_planar() {
-        // One sample gains nothing from lanes; it takes the general path, as it always did.
-        Some(light) if n > 1 => {
-            // What the BSDF is for every sample: a Lambertian one seen from a side it reflects
-            // on is a constant colour times the cosine, with the cosine's pdf (its own
-            // variant, without the arrays the others need); the others are evaluated sample
-            // by sample.
-            let planar = match &material.bsdf {
-                // (A normal or bump map's factor varies with the light's direction.)
-                Bsdf::Lambert(_) if material.perturbed.is_none() => match material.orient(wo) {
-                    Some(_) => planar::planar::<true>,
-                    None => return Color::ZERO, // a one-sided surface seen from behind
-                },
-                _ => planar::planar::<false>,
-            };
-            let vertex = planar::Vertex {
-                scene,
-                light,
-                si,
-                frame,
-                wo,
-                material,
-                n,
-                delta,
-            };
-            planar(&vertex, stats)
-        }
-        _ if n == 1 => one_sample(scene, si, frame, wo, material, delta, stats),
-        _ => any_lights(scene, si, frame, wo, material, n, delta, stats),
+    let delta = sampler.next_3d();
+    if n == 1 {
+        one_sample(scene, si, frame, wo, material, delta, stats)
+    } else {
+        any_lights(scene, si, frame, wo, material, n, delta, stats)
     }
 }
 
@@ -141,6 +84,47 @@ pub(crate) fn one_light(
     sampler: &mut crate::sampler::Sampler,
 ) -> Option<(Ray, f32, Color)> {
     light_sample(scene, si, frame, wo, material, 1, sampler.next_3d())
+}
+
+/// The numbers of a vertex's `n` light samples: sample j is the lattice point
+/// (Δ + j·g) mod 1, computed in 32-bit fixed point (the module comment).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Lattice {
+    delta: [f32; 3],
+    /// Δ in fixed point.
+    pub fixed: [u32; 3],
+    step: u32,
+}
+
+impl Lattice {
+    #[inline(always)]
+    pub(crate) fn new(delta: [f32; 3], n: u32) -> Lattice {
+        Lattice {
+            delta,
+            fixed: delta.map(fixed),
+            step: (u32::MAX / n.max(1)).wrapping_add(1),
+        }
+    }
+
+    /// j·g in fixed point, to be added to Δ's.
+    #[inline(always)]
+    pub(crate) fn offsets(&self, j: u32) -> [u32; 3] {
+        [
+            j.wrapping_mul(self.step),
+            j.wrapping_mul(G1),
+            j.wrapping_mul(G2),
+        ]
+    }
+
+    /// Sample `j`'s numbers (sample 0's are Δ itself).
+    #[inline(always)]
+    pub(crate) fn point(&self, j: u32) -> [f32; 3] {
+        if j == 0 {
+            return self.delta;
+        }
+        let g = self.offsets(j);
+        std::array::from_fn(|d| unit(self.fixed[d].wrapping_add(g[d])))
+    }
 }
 
 /// One light sample (`n` = 1, the default): `any_lights` without its batch, its lattice and
@@ -216,19 +200,13 @@ fn any_lights(
     let mut sum = Color::ZERO;
     // Left uninitialised: entry k is written before it is read.
     let mut pending = [const { MaybeUninit::<(Ray, f32, Color)>::uninit() }; BATCH];
-    let fixed_delta = delta.map(fixed);
-    let step = (u32::MAX / n.max(1)).wrapping_add(1);
+    let lattice = Lattice::new(delta, n);
     let mut i = 0;
     while i < n {
         let m = (n - i).min(BATCH as u32);
         let mut k = 0;
         for j in i..i + m {
-            let u = if j == 0 {
-                delta
-            } else {
-                let g = [j.wrapping_mul(step), j.wrapping_mul(G1), j.wrapping_mul(G2)];
-                std::array::from_fn(|d| unit(fixed_delta[d].wrapping_add(g[d])))
-            };
+            let u = lattice.point(j);
             let Some(sample) = light_sample(scene, si, frame, wo, material, n, u) else {
                 continue;
             };

@@ -1,8 +1,7 @@
 //! Eight f32 lanes in one AVX register ([`F8`]) and their masks ([`M8`]: all ones in a set
 //! lane, as the comparisons give it and `blendv` takes it): a [`Float`] of the lane types,
 //! each operation the IEEE one the scalar code performs on one lane (no FMA, no reciprocal
-//! approximations), so a lane computes the bits that `f32` computes. The planar light batch
-//! runs eight lanes wide on it (`integrator::nee::planar`), and the sixteen lanes of
+//! approximations), so a lane computes the bits that `f32` computes. The sixteen lanes of
 //! CPUs without AVX-512 are two of it ([`super::avx2`]).
 //!
 //! These are `#[inline(always)]` safe functions that run AVX instructions, sound only

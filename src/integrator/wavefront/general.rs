@@ -66,13 +66,6 @@ impl<'a> General<'a> {
         }
     }
 
-    /// Lane `l`'s material, if it is one of `lanes`.
-    #[inline(always)]
-    pub fn material(&self, l: usize) -> Option<&Material> {
-        let m = self.materials[l].as_deref();
-        m.filter(|_| self.lanes.bits() & 1 << l != 0)
-    }
-
     /// `Material::eval_pdf` of each lane in `glossy` for local directions `wo`, `wi`;
     /// zero in the other lanes.
     #[inline(always)]

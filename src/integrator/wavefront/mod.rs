@@ -42,14 +42,12 @@
 //!
 //! The scenes it takes ([`Wavefront::new`]): any material, any lights, any camera (a
 //! pinhole's rays made in the lanes, the others' by each lane's `Camera`), either sampler;
-//! the `path` integrator with any number of light samples a vertex. One planar light (a
-//! triangle or a parallelogram of constant radiance) the lanes sample in their registers,
-//! and with several samples a vertex at Lambertian vertices as the planar batch does
-//! ([`nee`]); any other lights (several, spheres, meshes, textured, point, spot,
+//! the `path` integrator with any number of light samples a vertex ([`nee`]). One planar
+//! light (a triangle or a parallelogram of constant radiance) the lanes sample in their
+//! registers; any other lights (several, spheres, meshes, textured, point, spot,
 //! directional, environments) each lane asks of `Lights`, a lane at a time, with the path
 //! tracer's own functions ([`lights`]), and those scenes are traced through the scene's
-//! queries; several samples a vertex anywhere else are each lane's own call of the path
-//! tracer's next-event estimation (`Wavefront::several`). The lanes shade in their
+//! queries. The lanes shade in their
 //! registers the Lambertian, mirror, smooth glass, rough conductor and rough glass
 //! (Beckmann or GGX, isotropic or not; glass of unit factors) and black materials, their
 //! colours constant or textured (looked up at each hit as `Scene::material_at` does, so
@@ -395,7 +393,7 @@ pub struct Ball {
     pub prim: u32,
 }
 
-/// The scene's one light, as `Lights::sample`, `Lights::pdf` and the planar batch read it.
+/// The scene's one light, as `Lights::sample` and `Lights::pdf` read it.
 #[derive(Clone, Copy)]
 struct Light {
     /// A point is `a + b·u + c·v` (parallelogram) or `a·w + b·u + c·v` (triangle).
@@ -425,13 +423,6 @@ impl<'a> Wavefront<'a> {
         }
         let planar = scene.lights.single_planar();
         let materials: Vec<Shading> = scene.materials.iter().map(Shading::of).collect();
-        // Several light samples a vertex at other than Lambertian vertices under one planar
-        // light (the planar batch's) are each lane's `sample_lights_at`, which reads the
-        // lane's hit: not by brute force.
-        let glossy = materials
-            .iter()
-            .any(|m| matches!(m.flags & KIND, ROUGH | ROUGH_GLASS | GENERAL));
-        let own_batch = p.shadow_rays == 1 || !glossy;
         let resolved = (scene.materials.iter().zip(&materials))
             .map(|(m, sh)| {
                 (sh.flags & KIND == GENERAL && !sh.textured)
@@ -478,7 +469,7 @@ impl<'a> Wavefront<'a> {
             width: s.width,
             backend,
         };
-        if own_batch && w.fill_tables() {
+        if w.fill_tables() {
             w.trace = Trace::Lanes;
         } else {
             (w.tris, w.balls) = (Vec::new(), Vec::new());

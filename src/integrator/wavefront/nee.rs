@@ -1,28 +1,26 @@
-//! Next-event estimation lane by lane: one sample a vertex as `nee::one_sample` computes it
-//! (its shadow rays are left to the caller, which pools them across groups of lanes), the
-//! light sampled in the lanes where the scene has one planar light and asked of `Lights`
-//! lane by lane otherwise ([`super::lights`]); or, with one planar light, n samples as the
-//! planar batch does (`nee::planar::planar::<true>`, Lambertian vertices), the samples
-//! computed sixteen lanes at a time and each lane's shadow rays traced as its own packets.
+//! Next-event estimation lane by lane, as `nee` computes it: one sample a vertex
+//! ([`Wavefront::one_sample`]: `light_sample`; its shadow rays are left to the caller, which
+//! pools them across groups of lanes), or n samples of the vertex's lattice
+//! ([`Wavefront::samples`]: `any_lights`, their shadow rays traced a sample at a time). The
+//! light is sampled in the lanes where the scene has one planar light and asked of `Lights`
+//! lane by lane otherwise ([`super::lights`]).
 
 use super::bsdf::{flip_z, Microfacets};
 use super::general::{lane, General};
 use super::lights::Incident;
-use super::simd::{F, M, V3};
+use super::simd::{F, M, U, V3};
 use super::{Bits, LaneMask, Light, Wavefront};
+use crate::geometry::ray::{offset_by, offset_ray_origin, SHADOW_EPSILON};
 use crate::accel::{RayPacket, PACKET};
-use crate::geometry::ray::{offset_by, offset_push, offset_ray_origin, SHADOW_EPSILON};
 use crate::geometry::Frame;
-use crate::integrator::nee::{lambert_weight, shadow_dir, wrap};
-use crate::integrator::{sample_lights_at, RayStats};
+use crate::integrator::{Lattice, RayStats};
 use crate::light::{planar_point, towards};
 use crate::material::lambert;
-use crate::material::{rough_dielectric, TransportMode};
 use crate::material::sampling::cosine_hemisphere_pdf_lanes;
 use crate::material::sampling::power_heuristic_lanes;
-use crate::simd::{Float, Vector3};
+use crate::material::{rough_dielectric, TransportMode};
+use crate::simd::{lanes_of, Float, Vector3};
 use glam::Vec3A;
-use std::f32::consts::{FRAC_1_PI, PI};
 
 /// A vertex of each lane: the point, its error bound and geometric normal, the frame, the
 /// direction to the last vertex (local), its material's colour, its rough materials (where
@@ -55,6 +53,7 @@ impl Wavefront<'_> {
         hits: &[Option<crate::scene::Interaction>; 16],
         lanes: M,
         u: [F; 3],
+        n: F,
     ) -> (M, V3, V3, F, V3) {
         let one = F::splat(1.0);
         let inc = match &self.light {
@@ -71,159 +70,118 @@ impl Wavefront<'_> {
         let mis = F::select(
             inc.delta,
             one,
-            power_heuristic_lanes(one * inc.pdf, bsdf_pdf),
+            power_heuristic_lanes(n * inc.pdf, bsdf_pdf),
         );
         let contribution = (f * inc.le).scale(mis / inc.pdf);
         (shadow, inc.o, inc.d, inc.t_max, contribution)
     }
 
-    /// The light's contribution at the Lambertian vertices of lanes `lanes` with `n` > 1
-    /// light samples each, as the planar batch computes it (`planar_in::<_, true>`): the
-    /// samples of a rank-1 lattice shifted by `u`, the power heuristic's weight over the
-    /// light pdf in its rearranged form, the weights summed in four running sums by sample
-    /// index mod 4. Zero in lanes not `oriented` (`sample_lights` returns there before the
-    /// batch) and in lanes not in `lanes`.
-    ///
-    /// The samples are computed sixteen lanes at a time, sample by sample; the shadow rays
-    /// are traced lane by lane, each lane's as the packets of one origin that the batch
-    /// traces (`Scene::occluded_packet`: the BVH culls most of the scene for rays that
-    /// share an origin, which brute force over sixteen origins cannot).
+    /// The light's contribution with `n` > 1 light samples a vertex at the non-delta
+    /// vertices of lanes `lanes`, for the vertex's numbers `delta` (`any_lights`): sample j
+    /// of each lane's lattice as [`Wavefront::one_sample`] computes it with the weight of n
+    /// samples, the contributions of those whose shadow ray is clear summed in sample order
+    /// and divided by n. The samples are computed sixteen lanes at a time, a batch of
+    /// sixteen samples at once; each lane's shadow rays of a batch are traced as packets of
+    /// one origin (`Scene::occluded_packet`: the BVH culls most of the scene for rays from
+    /// one point towards a light, which brute force over sixteen origins cannot).
     #[inline(always)]
-    pub(super) unsafe fn batch(
-        &self,
-        v: &Vertex,
-        lanes: M,
-        [du, dv, _]: [F; 3],
-        stats: &mut RayStats,
-    ) -> V3 {
-        let lanes = lanes & v.oriented;
-        if !lanes.any() {
-            return V3::zero();
-        }
-        let zero = F::zero();
-        let Some(lt) = &self.light else {
-            return V3::zero();
-        };
-        let n = self.shadow_rays;
-        let nf = n as f32;
-        let (a, b, c) = (V3::splat(lt.a), V3::splat(lt.b), V3::splat(lt.c));
-        let (nl, off) = (V3::splat(lt.normal), V3::splat(lt.offset));
-        let ns = v.frame.n;
-        // The two possible origins, above and below the surface (`offset_ray_origin`).
-        let push = offset_push(v.ng, v.p_err);
-        let above = offset_by(v.p, push, v.ng, v.ng);
-        let below = offset_by(v.p, push, v.ng, -v.ng);
-        let (mut above_a, mut below_a) = ([[0f32; 16]; 3], [[0f32; 16]; 3]);
-        above.store(&mut above_a);
-        below.store(&mut below_a);
-        let (inv_n, neg_area) = (F::splat(1.0 / nf), F::splat(-lt.area));
-        let k = F::splat(nf * nf * PI * PI);
-        let mut acc = [zero; 4];
-        let mut first = 0;
-        while first < n {
-            let m = (n - first).min(PACKET as u32) as usize;
-            // Per sample of this batch: its weight, the lanes it counts in (`good`) and
-            // whose ray leaves below the surface, and the rays' directions (by sample,
-            // axis and lane).
-            let mut weight = [zero; PACKET];
-            let (mut good, mut under) = ([0 as Bits; PACKET], [0 as Bits; PACKET]);
-            let mut dirs = [[[0f32; 16]; 3]; PACKET];
-            for s in 0..m {
-                let j = first + s as u32;
-                // Sample j of the lattice shifted by Δ, wrapped into [0, 1).
-                let u = wrap(du + F::splat(j as f32) * inv_n);
-                let w = wrap(dv + F::splat(crate::integrator::lattice_v(j)));
-                let q = planar_point(a, b, c, lt.triangle, u, w);
-                let d = q - v.p;
-                let dist2 = d.dot(d);
-                let down = v.ng.dot(d).lt(zero);
-                let (faces, w) = lambert_weight(d, dist2, (nl, neg_area), (ns, v.side), k);
-                under[s] = down.bits();
-                good[s] = (lanes & dist2.gt(zero) & faces).bits();
-                weight[s] = w;
-                shadow_dir(q, (nl, off), down, (above, below)).store(&mut dirs[s]);
-            }
-            // Each lane's shadow rays, in up to two packets by the side they leave from.
-            let mut visible = [0 as Bits; PACKET];
-            let mut ll = lanes.bits();
-            while ll != 0 {
-                let lane = ll.trailing_zeros() as usize;
-                ll &= ll - 1;
-                let bit = |x: &[Bits; PACKET]| {
-                    (0..m).fold(0u32, |acc, s| acc | (((x[s] >> lane) & 1) as u32) << s)
-                };
-                let (ok, down) = (bit(&good), bit(&under));
-                let mut pk = RayPacket {
-                    o: Vec3A::ZERO,
-                    d: [[0.0; PACKET]; 3],
-                    t_max: [1.0 - SHADOW_EPSILON; PACKET],
-                };
-                for (s, dir) in dirs.iter().enumerate().take(m) {
-                    for (row, axis) in pk.d.iter_mut().zip(dir) {
-                        row[s] = axis[lane];
-                    }
-                }
-                let mut seen = 0;
-                for (origin, active) in [(&above_a, ok & !down), (&below_a, ok & down)] {
-                    if active != 0 {
-                        pk.o = Vec3A::new(origin[0][lane], origin[1][lane], origin[2][lane]);
-                        stats.shadow_rays += active.count_ones() as u64;
-                        seen |= active & !self.scene.occluded_packet(&pk, active);
-                    }
-                }
-                for (s, vis) in visible.iter_mut().enumerate().take(m) {
-                    *vis |= (((seen >> s) & 1) as Bits) << lane;
-                }
-            }
-            for s in 0..m {
-                let r = &mut acc[(first as usize + s) % 4];
-                *r = *r + F::select(M::from_bits(visible[s]), weight[s], zero);
-            }
-            first += m as u32;
-        }
-        let sum = (acc[0] + acc[1]) + (acc[2] + acc[3]);
-        let e = (v.albedo.scale(F::splat(FRAC_1_PI)) * V3::splat(lt.radiance)).scale(sum);
-        V3::select(lanes, e.div(F::splat(nf)), V3::zero())
-    }
-}
-
-impl Wavefront<'_> {
-    /// The light's contribution with `n` > 1 light samples a vertex at the vertices of
-    /// lanes `lanes` (the hits in `hits`: [`super::Trace::Scene`]) that the planar batch does
-    /// not take (other lights, other materials): each lane's `sample_lights_at`, the path
-    /// tracer's own next-event estimation for the lane's numbers `[du, dv, dw]`, its shadow
-    /// rays traced as it traces them. Zero in the other lanes.
-    #[inline(always)]
-    pub(super) fn several(
+    pub(super) unsafe fn samples(
         &self,
         v: &Vertex,
         hits: &[Option<crate::scene::Interaction>; 16],
         lanes: M,
-        [du, dv, dw]: [F; 3],
+        delta: [F; 3],
         stats: &mut RayStats,
     ) -> V3 {
-        let (du, dv, dw) = (du.to_array(), dv.to_array(), dw.to_array());
-        let wo = v.wo.to_arrays();
-        let mut e = [[0f32; 16]; 3];
-        for l in crate::simd::lanes_of(u32::from(lanes.bits())) {
-            let si = hits[l].as_ref().expect("a hit where a light is sampled");
-            // (`Scene::material_at`, as the path tracer finds it, where the lane has not
-            // already found it.)
-            let at;
-            let material = match v.general.and_then(|g| g.material(l)) {
-                Some(m) => m,
-                None => {
-                    at = self.scene.material_at(si);
-                    &at
-                }
-            };
-            let frame = Frame::from_normal(si.ns);
-            let delta = [du[l], dv[l], dw[l]];
-            let n = self.shadow_rays;
-            let c = sample_lights_at(self.scene, si, &frame, lane(&wo, l), material, n, delta, stats);
-            (e[0][l], e[1][l], e[2][l]) = (c.x, c.y, c.z);
+        let n = self.shadow_rays;
+        let nf = F::splat(n as f32);
+        // (No closures over lanes here: they would be compiled without the lanes' features.)
+        let delta = [delta[0].to_array(), delta[1].to_array(), delta[2].to_array()];
+        let lattice = Lattice::new([0.0; 3], n);
+        // Δ in fixed point, by axis and lane.
+        let mut fixed = [[0u32; 16]; 3];
+        for (a, f) in fixed.iter_mut().enumerate() {
+            *f = delta[a].map(crate::integrator::nee::fixed);
         }
-        V3::load(&e)
+        let fixed = [U::load(&fixed[0]), U::load(&fixed[1]), U::load(&fixed[2])];
+        let scale = F::splat(1.0 / 16_777_216.0);
+        let mut sum = V3::zero();
+        let mut first = 0;
+        while first < n {
+            let m = (n - first).min(PACKET as u32) as usize;
+            // Per sample of the batch: the lanes that trace a shadow ray, and the rays
+            // (by sample, axis and lane) and contributions.
+            let mut shadow = [0 as Bits; PACKET];
+            let mut rays = [[[[0f32; 16]; 3]; 2]; PACKET];
+            let mut t_max = [[0f32; 16]; PACKET];
+            let mut lit = [V3::zero(); PACKET];
+            for s in 0..m {
+                // Sample j's numbers, `Lattice::point` in the lanes.
+                let j = first + s as u32;
+                let u = if j == 0 {
+                    [F::load(&delta[0]), F::load(&delta[1]), F::load(&delta[2])]
+                } else {
+                    let g = lattice.offsets(j);
+                    let mut u = [F::zero(); 3];
+                    for a in 0..3 {
+                        u[a] = fixed[a].add(U::splat(g[a])).shr::<8>().to_f32() * scale;
+                    }
+                    u
+                };
+                let (sh, o, d, t, c) = self.one_sample(v, hits, lanes, u, nf);
+                shadow[s] = sh.bits();
+                o.store(&mut rays[s][0]);
+                d.store(&mut rays[s][1]);
+                t.store(&mut t_max[s]);
+                lit[s] = c;
+            }
+            let clear = self.clear_by_lane(&shadow[..m], &rays[..m], &t_max[..m], stats);
+            for s in 0..m {
+                sum = V3::select(M::from_bits(clear[s]), sum + lit[s], sum);
+            }
+            first += m as u32;
+        }
+        sum.div(nf)
+    }
+
+    /// Which of the rays of a batch of samples (`shadow[s]`: the lanes that trace sample s's
+    /// ray, `rays[s]` its origins and directions, `t_max[s]` how far they must be clear) are
+    /// clear, by sample: each lane's rays in packets of the samples that share its origin.
+    #[inline(always)]
+    fn clear_by_lane(
+        &self,
+        shadow: &[Bits],
+        rays: &[[[[f32; 16]; 3]; 2]],
+        t_max: &[[f32; 16]],
+        stats: &mut RayStats,
+    ) -> [Bits; PACKET] {
+        let mut clear = [0 as Bits; PACKET];
+        let all = shadow.iter().fold(0, |a, &b| a | b);
+        for l in lanes_of(u32::from(all)) {
+            // This lane's samples with a shadow ray (bit s: sample s).
+            let mut left = (0..shadow.len()).fold(0u32, |a, s| a | (((shadow[s] >> l) & 1) as u32) << s);
+            stats.shadow_rays += left.count_ones() as u64;
+            let mut pk = RayPacket {
+                o: Vec3A::ZERO,
+                d: [[0.0; PACKET]; 3],
+                t_max: [0.0; PACKET],
+            };
+            for s in lanes_of(left) {
+                (pk.d[0][s], pk.d[1][s], pk.d[2][s]) = (rays[s][1][0][l], rays[s][1][1][l], rays[s][1][2][l]);
+                pk.t_max[s] = t_max[s][l];
+            }
+            while left != 0 {
+                // The samples whose rays leave from the first one's origin.
+                pk.o = lane(&rays[left.trailing_zeros() as usize][0], l);
+                let same = lanes_of(left).fold(0, |a, s| a | ((lane(&rays[s][0], l) == pk.o) as u32) << s);
+                let seen = same & !self.scene.occluded_packet(&pk, same);
+                for s in lanes_of(seen) {
+                    clear[s] |= 1 << l;
+                }
+                left &= !same;
+            }
+        }
+        clear
     }
 }
 

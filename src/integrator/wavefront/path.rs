@@ -337,7 +337,8 @@ impl Wavefront<'_> {
                 side,
             };
             if self.shadow_rays == 1 {
-                let (lanes, o, d, t_max, contribution) = self.one_sample(&v, &st.hits, nee, u);
+                let one = F::splat(1.0);
+                let (lanes, o, d, t_max, contribution) = self.one_sample(&v, &st.hits, nee, u, one);
                 stats.rays.shadow_rays += lanes.count() as u64;
                 let sh = &mut st.shadow;
                 sh.lanes = lanes.bits();
@@ -347,17 +348,7 @@ impl Wavefront<'_> {
                 (beta * contribution).store(&mut sh.lit);
                 (beta * V3::zero()).store(&mut sh.dark);
             } else {
-                // Several: the planar batch at Lambertian vertices under one planar light,
-                // each lane's own `sample_lights_at` at the others.
-                let planar = match self.light {
-                    Some(_) => nee & lambert,
-                    None => M::none(),
-                };
-                let lit = V3::select(
-                    planar,
-                    self.batch(&v, planar, u, &mut stats.rays),
-                    self.several(&v, &st.hits, nee & !planar, u, &mut stats.rays),
-                );
+                let lit = self.samples(&v, &st.hits, nee, u, &mut stats.rays);
                 l = V3::select(nee, l + beta * lit, l);
                 st.shadow.nee = 0;
             }
