@@ -86,27 +86,23 @@ pub(crate) fn one_light(
     light_sample(scene, si, frame, wo, material, 1, sampler.next_3d())
 }
 
-/// The numbers of a vertex's `n` light samples: sample j is the lattice point
+/// The lattice of a vertex's `n` light samples: sample j's numbers are the point
 /// (Δ + j·g) mod 1, computed in 32-bit fixed point (the module comment).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Lattice {
-    delta: [f32; 3],
-    /// Δ in fixed point.
-    pub fixed: [u32; 3],
+    /// 2³²/n, the first generator in fixed point.
     step: u32,
 }
 
 impl Lattice {
     #[inline(always)]
-    pub(crate) fn new(delta: [f32; 3], n: u32) -> Lattice {
+    pub(crate) fn new(n: u32) -> Lattice {
         Lattice {
-            delta,
-            fixed: delta.map(fixed),
             step: (u32::MAX / n.max(1)).wrapping_add(1),
         }
     }
 
-    /// j·g in fixed point, to be added to Δ's.
+    /// j·g in fixed point, to be added to Δ's ([`fixed`]).
     #[inline(always)]
     pub(crate) fn offsets(&self, j: u32) -> [u32; 3] {
         [
@@ -116,14 +112,14 @@ impl Lattice {
         ]
     }
 
-    /// Sample `j`'s numbers (sample 0's are Δ itself).
+    /// Sample `j`'s numbers for Δ = `delta` (`fixed` in fixed point); sample 0's are Δ.
     #[inline(always)]
-    pub(crate) fn point(&self, j: u32) -> [f32; 3] {
+    pub(crate) fn point(&self, delta: [f32; 3], fixed: [u32; 3], j: u32) -> [f32; 3] {
         if j == 0 {
-            return self.delta;
+            return delta;
         }
         let g = self.offsets(j);
-        std::array::from_fn(|d| unit(self.fixed[d].wrapping_add(g[d])))
+        std::array::from_fn(|d| unit(fixed[d].wrapping_add(g[d])))
     }
 }
 
@@ -200,13 +196,13 @@ fn any_lights(
     let mut sum = Color::ZERO;
     // Left uninitialised: entry k is written before it is read.
     let mut pending = [const { MaybeUninit::<(Ray, f32, Color)>::uninit() }; BATCH];
-    let lattice = Lattice::new(delta, n);
+    let (lattice, fixed_delta) = (Lattice::new(n), delta.map(fixed));
     let mut i = 0;
     while i < n {
         let m = (n - i).min(BATCH as u32);
         let mut k = 0;
         for j in i..i + m {
-            let u = lattice.point(j);
+            let u = lattice.point(delta, fixed_delta, j);
             let Some(sample) = light_sample(scene, si, frame, wo, material, n, u) else {
                 continue;
             };

@@ -115,15 +115,15 @@ impl Wavefront<'_> {
             },
             hits: [None; 16],
         };
-        // Several light samples a vertex are traced as each lane's packets, in `front`:
-        // nothing to pool, so one group. (Only the groups used are made: each is a few
-        // kilobytes, which a tile's start would otherwise copy for nothing.)
-        let n = if self.shadow_rays > 1 {
-            1
-        } else if self.trace == Trace::Lanes {
-            POOL
-        } else {
-            GROUPS
+        // Through the scene, many groups' closest hits in flight. By brute force, a pool of
+        // groups' shadow rays packed together; several light samples a vertex are traced as
+        // each lane's packets, in `front`: nothing to pool, so one group. (Only the groups
+        // used are made: each is a few kilobytes, which a tile's start would otherwise copy
+        // for nothing.)
+        let n = match self.trace {
+            Trace::Scene => GROUPS,
+            Trace::Lanes if self.shadow_rays > 1 => 1,
+            Trace::Lanes => POOL,
         };
         let mut all: Vec<Lanes<S>> = (0..n).map(|_| lanes()).collect();
         let groups = &mut all[..];

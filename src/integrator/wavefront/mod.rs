@@ -47,15 +47,15 @@
 //! registers; any other lights (several, spheres, meshes, textured, point, spot,
 //! directional, environments) each lane asks of `Lights`, a lane at a time, with the path
 //! tracer's own functions ([`lights`]), and those scenes are traced through the scene's
-//! queries. The lanes shade in their
-//! registers the Lambertian, mirror, smooth glass, rough conductor and rough glass
-//! (Beckmann or GGX, isotropic or not; glass of unit factors) and black materials, their
-//! colours constant or textured (looked up at each hit as `Scene::material_at` does, so
-//! not with brute force; a rough material's not), with no normal or bump map; every other
-//! material (`GENERAL`: the plastics, principled, Oren–Nayar, smooth conductors, blends,
-//! maps, textured roughness) by calling each lane's `Material` ([`general`]), which brute
-//! force takes where it is the same at every hit. Other integrators, and any CPU without
-//! AVX2, BMI1, BMI2 and POPCNT, render with the stream ([`super::stream`]) or `path::li`.
+//! queries. The lanes shade in their registers the Lambertian, mirror, smooth glass, rough
+//! conductor and rough glass (Beckmann or GGX, isotropic or not; glass of unit factors)
+//! and black materials, their colours constant or textured (looked up at each hit as
+//! `Scene::material_at` does, so not with brute force; a rough material's not), with no
+//! normal or bump map; every other material (`GENERAL`: the plastics, principled,
+//! Oren–Nayar, smooth conductors, blends, maps, textured roughness) by calling each lane's
+//! `Material` ([`general`]), which brute force takes where it is the same at every hit.
+//! Other integrators, and any CPU without AVX2, BMI1, BMI2 and POPCNT, render with the
+//! stream ([`super::stream`]) or `path::li`.
 //!
 //! The lanes' code is written once over a small SIMD type of sixteen lanes and compiled
 //! twice ([`Backend`]): in one AVX-512 register ([`avx512`]) and in two AVX2 registers

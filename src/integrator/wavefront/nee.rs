@@ -1,8 +1,8 @@
 //! Next-event estimation lane by lane, as `nee` computes it: one sample a vertex
 //! ([`Wavefront::one_sample`]: `light_sample`; its shadow rays are left to the caller, which
 //! pools them across groups of lanes), or n samples of the vertex's lattice
-//! ([`Wavefront::samples`]: `any_lights`, their shadow rays traced a sample at a time). The
-//! light is sampled in the lanes where the scene has one planar light and asked of `Lights`
+//! ([`Wavefront::samples`]: `any_lights`, each lane's shadow rays traced as its packets).
+//! The light is sampled in the lanes where the scene has one planar light and asked of `Lights`
 //! lane by lane otherwise ([`super::lights`]).
 
 use super::bsdf::{flip_z, Microfacets};
@@ -10,8 +10,8 @@ use super::general::{lane, General};
 use super::lights::Incident;
 use super::simd::{F, M, U, V3};
 use super::{Bits, LaneMask, Light, Wavefront};
-use crate::geometry::ray::{offset_by, offset_ray_origin, SHADOW_EPSILON};
 use crate::accel::{RayPacket, PACKET};
+use crate::geometry::ray::{offset_by, offset_ray_origin, SHADOW_EPSILON};
 use crate::geometry::Frame;
 use crate::integrator::{Lattice, RayStats};
 use crate::light::{planar_point, towards};
@@ -97,7 +97,7 @@ impl Wavefront<'_> {
         let nf = F::splat(n as f32);
         // (No closures over lanes here: they would be compiled without the lanes' features.)
         let delta = [delta[0].to_array(), delta[1].to_array(), delta[2].to_array()];
-        let lattice = Lattice::new([0.0; 3], n);
+        let lattice = Lattice::new(n);
         // Δ in fixed point, by axis and lane.
         let mut fixed = [[0u32; 16]; 3];
         for (a, f) in fixed.iter_mut().enumerate() {
