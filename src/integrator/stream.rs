@@ -1,7 +1,9 @@
 //! The stream path tracer: a tile's camera samples as a pool of [`POOL`] paths in flight,
 //! traced a segment at a time for all of them — gather the rays of the live paths, find
 //! their closest hits in one call ([`Scene::intersect_many`]), then advance each path by one
-//! vertex — for any scene, camera, material, texture and light.
+//! vertex — for any scene, camera, material, texture and light. It renders the path
+//! tracer on CPUs without AVX2 (and with `--backend stream`); elsewhere the sixteen-lane
+//! wavefront (`integrator::wavefront`) renders every scene the path tracer does.
 //!
 //! The maths of a vertex is [`PathState::step`], the same function that the one-path loop
 //! [`super::path::li`] runs, so each sample's value is the same bits by construction; only
