@@ -159,7 +159,8 @@ impl Wavefront<'_> {
         let all = shadow.iter().fold(0, |a, &b| a | b);
         for l in lanes_of(u32::from(all)) {
             // This lane's samples with a shadow ray (bit s: sample s).
-            let mut left = (0..shadow.len()).fold(0u32, |a, s| a | (((shadow[s] >> l) & 1) as u32) << s);
+            let bit = |s: usize| (((shadow[s] >> l) & 1) as u32) << s;
+            let mut left = (0..shadow.len()).fold(0u32, |a, s| a | bit(s));
             stats.shadow_rays += left.count_ones() as u64;
             let mut pk = RayPacket {
                 o: Vec3A::ZERO,
@@ -167,13 +168,15 @@ impl Wavefront<'_> {
                 t_max: [0.0; PACKET],
             };
             for s in lanes_of(left) {
-                (pk.d[0][s], pk.d[1][s], pk.d[2][s]) = (rays[s][1][0][l], rays[s][1][1][l], rays[s][1][2][l]);
+                let d = &rays[s][1];
+                (pk.d[0][s], pk.d[1][s], pk.d[2][s]) = (d[0][l], d[1][l], d[2][l]);
                 pk.t_max[s] = t_max[s][l];
             }
             while left != 0 {
                 // The samples whose rays leave from the first one's origin.
                 pk.o = lane(&rays[left.trailing_zeros() as usize][0], l);
-                let same = lanes_of(left).fold(0, |a, s| a | ((lane(&rays[s][0], l) == pk.o) as u32) << s);
+                let from = |s: usize| ((lane(&rays[s][0], l) == pk.o) as u32) << s;
+                let same = lanes_of(left).fold(0, |a, s| a | from(s));
                 let seen = same & !self.scene.occluded_packet(&pk, same);
                 for s in lanes_of(seen) {
                     clear[s] |= 1 << l;
