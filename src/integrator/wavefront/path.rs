@@ -337,7 +337,6 @@ impl Wavefront<'_> {
                 side,
             };
             if self.shadow_rays == 1 {
-                let one = F::splat(1.0);
                 let (lanes, o, d, t_max, contribution) = self.one_sample(&v, &st.hits, nee, u, one);
                 stats.rays.shadow_rays += lanes.count() as u64;
                 let sh = &mut st.shadow;
