@@ -95,6 +95,12 @@ pub trait Float:
     /// and exponent fields, read as they are (the sign is ignored; other x give other
     /// numbers, the same in every instance).
     fn frexp(self) -> (Self, Self);
+    /// Rounded toward zero to a whole number (NaN and ±∞ kept).
+    fn trunc(self) -> Self;
+    /// `table[i]` in each lane for the lane's `index` i, a whole number (`trunc`'s) below
+    /// 2³¹, clamped to the table: a tabulated function's lookup with any table in any lane
+    /// (where the tables are concatenated). Panics on an empty table.
+    fn gather(table: &[f32], index: Self) -> Self;
 }
 
 /// Sixteen f32 lanes in registers ([`avx512::F`], [`avx2::F`]): what code written once for
@@ -221,6 +227,20 @@ macro_rules! one_lane {
                 let m = <$t>::from_bits((b & 0x007f_ffff) | 0x3f80_0000);
                 (m, ((b >> 23) & 0xff) as $t - 127.0)
             }
+            #[inline(always)]
+            fn trunc(self) -> $t {
+                // (Whole already from 2²³ up; the sign kept for −0.)
+                if self.abs() < 8_388_608.0 {
+                    ((self as i32) as $t).copysign(self)
+                } else {
+                    self
+                }
+            }
+            #[inline(always)]
+            fn gather(table: &[f32], index: $t) -> $t {
+                // (`as usize` takes NaN and negatives to 0.)
+                table[(index as usize).min(table.len() - 1)] as $t
+            }
         }
     };
 }
@@ -289,6 +309,14 @@ impl Float for Vec4 {
     fn frexp(self) -> (Vec4, Vec4) {
         let [a, b, c, d] = self.to_array().map(f32::frexp);
         (Vec4::new(a.0, b.0, c.0, d.0), Vec4::new(a.1, b.1, c.1, d.1))
+    }
+    #[inline(always)]
+    fn trunc(self) -> Vec4 {
+        Vec4::from_array(self.to_array().map(f32::trunc))
+    }
+    #[inline(always)]
+    fn gather(table: &[f32], index: Vec4) -> Vec4 {
+        Vec4::from_array(index.to_array().map(|i| f32::gather(table, i)))
     }
 }
 
@@ -479,5 +507,91 @@ impl<T: Float> Neg for V3<T> {
     #[inline(always)]
     fn neg(self) -> Self {
         V3::new(-self.x, -self.y, -self.z)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Float;
+
+    /// Inputs at the edges of `trunc` and `gather`: signs, zeros, halves, the largest
+    /// floats with a fraction, whole ones beyond, infinities and NaN.
+    const EDGES: [f32; 16] = [
+        0.0,
+        -0.0,
+        -0.5,
+        0.5,
+        1.0,
+        62.99,
+        63.0,
+        -1.5,
+        8_388_607.5,
+        -8_388_607.5,
+        16_777_216.0,
+        3e9,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::NAN,
+        1e-40,
+    ];
+
+    /// `trunc` of one lane is std's, bit for bit; `gather` reads the clamped entry.
+    #[test]
+    fn trunc_and_gather_of_one_lane() {
+        for x in EDGES {
+            assert_eq!(Float::trunc(x).to_bits(), x.trunc().to_bits(), "trunc {x}");
+        }
+        let table: Vec<f32> = (0..64).map(|i| i as f32 * 0.5).collect();
+        assert_eq!(f32::gather(&table, 5.0), 2.5);
+        assert_eq!(f32::gather(&table, -3.0), 0.0);
+        assert_eq!(f32::gather(&table, f32::NAN), 0.0);
+        assert_eq!(f32::gather(&table, 64.0), 31.5);
+        assert_eq!(f32::gather(&table, 1e9), 31.5);
+    }
+
+    /// Sixteen lanes (AVX-512, AVX2) compute each lane's `trunc` and `gather` as one lane
+    /// does.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn trunc_and_gather_in_lanes() {
+        let table: Vec<f32> = (0..40).map(|i| (i * i) as f32).collect();
+        // Whole indices below 2³¹ (and NaN and negatives), as the lookups make them.
+        let index = EDGES.map(|x| {
+            if x.abs() < 2e9 {
+                x.trunc()
+            } else {
+                x.min(39.0)
+            }
+        });
+        let want_t = EDGES.map(|x| Float::trunc(x).to_bits());
+        let want_g = index.map(|i| f32::gather(&table, i).to_bits());
+        if crate::cpu::avx512() {
+            use super::avx512::F;
+            // SAFETY: the CPU has AVX-512F.
+            let (t, g) = unsafe { lanes512(&table, &index) };
+            assert_eq!(t.map(f32::to_bits), want_t, "AVX-512 trunc");
+            assert_eq!(g.map(f32::to_bits), want_g, "AVX-512 gather");
+            #[target_feature(enable = "avx512f")]
+            unsafe fn lanes512(table: &[f32], index: &[f32; 16]) -> ([f32; 16], [f32; 16]) {
+                (
+                    F::load(&EDGES).trunc().to_array(),
+                    F::gather(table, F::load(index)).to_array(),
+                )
+            }
+        }
+        if std::arch::is_x86_feature_detected!("avx2") {
+            use super::avx2::F;
+            // SAFETY: the CPU has AVX2.
+            let (t, g) = unsafe { lanes256(&table, &index) };
+            assert_eq!(t.map(f32::to_bits), want_t, "AVX2 trunc");
+            assert_eq!(g.map(f32::to_bits), want_g, "AVX2 gather");
+            #[target_feature(enable = "avx,avx2")]
+            unsafe fn lanes256(table: &[f32], index: &[f32; 16]) -> ([f32; 16], [f32; 16]) {
+                (
+                    F::load(&EDGES).trunc().to_array(),
+                    F::gather(table, F::load(index)).to_array(),
+                )
+            }
+        }
     }
 }

@@ -790,6 +790,52 @@ fn general_materials_both_ways() {
     );
 }
 
+/// Rough plastics, which the lanes shade in their registers (`rough_plastic::Coated`), each
+/// lane reading its material's coating table: the walls a GGX one, `mirror1` a one-sided
+/// Beckmann one of another η, `mirror2` a two-sided nonlinear GGX one with a specular
+/// factor (three tables), by brute force and through the scene (where a smooth mesh ball is
+/// a fourth, with a textured albedo, which the lanes leave to its `Material`): the same film
+/// as one path at a time.
+#[test]
+fn rough_plastics_both_ways() {
+    if !cpu_runs_it() {
+        return;
+    }
+    let mut text = SPECULAR.to_string();
+    for (from, to) in [
+        (
+            "[material.white]\ntype = \"lambert\"",
+            "[material.white]\ntype = \"roughplastic\"\nalpha = 0.3\ndistribution = \"ggx\"",
+        ),
+        (
+            "[material.mirror1]\ntype = \"mirror\"\nreflectance = [0.9, 0.8, 0.7]",
+            "[material.mirror1]\ntype = \"roughplastic\"\nalbedo = [0.7, 0.3, 0.2]\nalpha = 0.15\ndistribution = \"beckmann\"\nior = 1.7",
+        ),
+        (
+            "[material.mirror2]\ntype = \"mirror\"\nreflectance = [0.6, 0.9, 0.9]",
+            "[material.mirror2]\ntype = \"roughplastic\"\nalbedo = [0.2, 0.5, 0.7]\nspecular = [0.9, 0.6, 0.4]\nalpha = 0.5\nnonlinear = true\ntwo_sided = true",
+        ),
+    ] {
+        assert!(text.contains(from), "SPECULAR holds {from}");
+        text = text.replacen(from, to, 1);
+    }
+    let through = text.clone()
+        + "[texture.checks]\ntype = \"checkerboard\"\ncolor0 = [0.05, 0.05, 0.05]\n\
+           color1 = [0.6, 0.4, 0.3]\nuv_scale = [4, 4]\n\
+           [material.tiles]\ntype = \"roughplastic\"\nalbedo = \"checks\"\nalpha = 0.2\n"
+        + &smooth_ball([0.0, 1.7, -1.2], 0.3, "tiles", 6, 10);
+    cases_both_ways(
+        "rough plastics",
+        [
+            (text.clone(), true, false, None),
+            (text, true, true, Some(0.6)),
+            (through.clone(), false, false, None),
+            (through, false, true, Some(0.7)),
+        ],
+        170,
+    );
+}
+
 /// A thin lens's and an orthographic camera's rays, made by each lane's `Camera` (a thin
 /// lens's from a second pair of numbers), by brute force ([`SPECULAR`]) and through the
 /// scene (with a smooth mesh ball): the same film as one path at a time.

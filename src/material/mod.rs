@@ -291,7 +291,7 @@ impl Material {
             Bsdf::OrenNayar(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
             Bsdf::RoughConductor(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
             Bsdf::Plastic(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
-            Bsdf::RoughPlastic(b) => (b.eval(wo, wi), b.pdf(wo, wi)),
+            Bsdf::RoughPlastic(b) => b.eval_pdf(wo, wi),
             Bsdf::Principled(b) => {
                 let (f, pdf) = b.eval_cos_pdf(wo, wi, TransportMode::Radiance);
                 (if wi.z == 0.0 { f } else { f / wi.z.abs() }, pdf)

@@ -17,12 +17,17 @@
 //!
 //! Lobe selection: the specular lobe with probability (1 − T(θo))·w / ((1 − T(θo))·w +
 //! T(θo)·(1 − w)), w = s̄/(d̄ + s̄); the diffuse one cosine-weighted. `pdf` is the mixture.
+//!
+//! The maths is written once over lanes ([`Coated`]): one path's BSDF runs it in one lane,
+//! the wavefront in sixteen, each lane reading its own coating table.
 
-use super::dielectric::{fresnel_dielectric, fresnel_refraction};
-use super::microfacet::{reflect_about, Microfacet, MicrofacetType};
+use super::dielectric::{fresnel_dielectric, fresnel_dielectric_lanes, fresnel_refraction};
+use super::microfacet::MicrofacetType;
+use super::microfacet::{reflect_about, reflect_about_lanes, Distribution, Microfacet};
 use super::plastic::mean;
-use super::sampling::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
+use super::sampling::{cosine_hemisphere, cosine_hemisphere_pdf_lanes};
 use super::BsdfSample;
+use crate::simd::{Float, Mask, Vector3};
 use crate::Color;
 use glam::{Vec2, Vec3A};
 use std::f32::consts::FRAC_1_PI;
@@ -41,14 +46,10 @@ pub struct CoatingTable {
 }
 
 impl CoatingTable {
-    /// Linear interpolation in the table (Mitsuba's `lerp_gather`).
+    /// Linear interpolation in the table ([`lerp_table`]).
     #[inline]
     pub fn transmittance(&self, cos_theta: f32) -> f32 {
-        let x = cos_theta * (TRANSMITTANCE_RES - 1) as f32;
-        let i = (x.max(0.0) as usize).min(TRANSMITTANCE_RES - 2);
-        let t = x - i as f32;
-        let (a, b) = (self.transmittance[i], self.transmittance[i + 1]);
-        a + (b - a) * t
+        lerp_table(&self.transmittance, 0.0, cos_theta)
     }
 }
 
@@ -214,73 +215,240 @@ impl RoughPlastic {
         }
     }
 
+    /// The coating's table, shared by every rough plastic of this (distribution, α, η).
     pub fn table(&self) -> &'static CoatingTable {
         self.table
     }
 
-    #[inline]
-    fn prob_specular(&self, t_o: f32) -> f32 {
-        let w = self.specular_sampling_weight;
-        let ps = (1.0 - t_o) * w;
-        let pd = t_o * (1.0 - w);
-        ps / (ps + pd)
+    /// This BSDF as one lane of [`Coated`], whose maths it runs.
+    #[inline(always)]
+    pub fn coated(&self) -> Coated<'static, Microfacet, Color> {
+        Coated {
+            distr: self.distr,
+            eta: self.eta,
+            diffuse_reflectance: self.diffuse_reflectance,
+            specular_reflectance: self.specular_reflectance,
+            nonlinear: self.nonlinear,
+            specular_sampling_weight: self.specular_sampling_weight,
+            inv_eta2: self.inv_eta2,
+            transmittance: &self.table.transmittance,
+            first: 0.0,
+            internal_reflectance: self.table.internal_reflectance,
+        }
     }
 
     /// wo.z > 0 required (one-sided).
     #[inline]
     pub fn eval(&self, wo: Vec3A, wi: Vec3A) -> Color {
-        if wo.z <= 0.0 || wi.z <= 0.0 {
-            return Color::ZERO;
-        }
-        let h = (wo + wi).normalize();
-        let d = self.distr.d(h);
-        let f = fresnel_dielectric(wo.dot(h), self.eta);
-        let g = self.distr.g(wo, wi, h);
-        let spec = self.specular_reflectance * (f * d * g / (4.0 * wo.z * wi.z));
-        let t_o = self.table.transmittance(wo.z);
-        let t_i = self.table.transmittance(wi.z);
-        let rho = self.diffuse_reflectance;
-        let r_int = self.table.internal_reflectance;
-        let base = if self.nonlinear {
-            rho / (Color::ONE - rho * r_int)
-        } else {
-            rho / (1.0 - r_int)
-        };
-        spec + base * (FRAC_1_PI * self.inv_eta2 * t_o * t_i)
+        self.coated().eval_lanes(wo, wi)
+    }
+
+    /// `eval` and `pdf` together, sharing what they share.
+    #[inline]
+    pub fn eval_pdf(&self, wo: Vec3A, wi: Vec3A) -> (Color, f32) {
+        self.coated().eval_pdf_lanes(wo, wi)
     }
 
     #[inline]
     pub fn pdf(&self, wo: Vec3A, wi: Vec3A) -> f32 {
-        if wo.z <= 0.0 || wi.z <= 0.0 {
-            return 0.0;
-        }
-        let ps = self.prob_specular(self.table.transmittance(wo.z));
-        let h = (wo + wi).normalize();
-        let spec = self.distr.d(h) * self.distr.g1(wo, h) / (4.0 * wo.z);
-        ps * spec + (1.0 - ps) * cosine_hemisphere_pdf(wi.z)
+        self.coated().pdf_lanes(wo, wi)
     }
 
     #[inline]
     pub fn sample(&self, wo: Vec3A, u1: f32, u2: Vec2) -> Option<BsdfSample> {
-        if wo.z <= 0.0 {
-            return None;
-        }
-        let ps = self.prob_specular(self.table.transmittance(wo.z));
-        let wi = if u1 < ps {
-            reflect_about(wo, self.distr.sample_visible(wo, u2))
-        } else {
-            square_to_cosine_hemisphere(u2)
-        };
-        let pdf = self.pdf(wo, wi);
-        if pdf.is_nan() || pdf <= 0.0 {
-            return None;
-        }
-        Some(BsdfSample {
+        let (wi, weight, pdf, ok) = self.coated().sample_lanes(wo, u1, u2.x, u2.y);
+        ok.then_some(BsdfSample {
             wi,
-            weight: self.eval(wo, wi) * (wi.z / pdf),
+            weight,
             pdf,
             specular: false,
             eta: 1.0,
         })
     }
+}
+
+/// Rough plastics in lanes, the maths written once: one path's is [`RoughPlastic::coated`]
+/// (distribution [`Microfacet`], colours [`Color`]), sixteen paths' the wavefront's
+/// (`Either<F>`, `V3`), each lane with its own parameters and coating table.
+#[derive(Clone, Copy)]
+pub struct Coated<'t, D, C: Vector3> {
+    pub distr: D,
+    pub eta: C::F,
+    pub diffuse_reflectance: C,
+    pub specular_reflectance: C,
+    pub nonlinear: Mask<C>,
+    pub specular_sampling_weight: C::F,
+    pub inv_eta2: C::F,
+    /// Transmittance tables of [`TRANSMITTANCE_RES`] entries one after another (one, or
+    /// those of all the lanes' materials); each lane's starts at `first`, a whole number.
+    pub transmittance: &'t [f32],
+    pub first: C::F,
+    /// R_int of each lane's coating.
+    pub internal_reflectance: C::F,
+}
+
+impl<D, C: Vector3> Coated<'_, D, C> {
+    /// The lanes' coating transmittances at `cos_theta` ([`lerp_table`]).
+    #[inline(always)]
+    fn transmittance(&self, cos_theta: C::F) -> C::F {
+        lerp_table(self.transmittance, self.first, cos_theta)
+    }
+
+    /// The specular lobe's probability, given T(θo).
+    #[inline(always)]
+    fn prob_specular(&self, t_o: C::F) -> C::F {
+        let (one, w) = (C::F::splat(1.0), self.specular_sampling_weight);
+        let ps = (one - t_o) * w;
+        let pd = t_o * (one - w);
+        ps / (ps + pd)
+    }
+
+    /// What f and the pdf share for a pair of directions: the half vector h, D(h) and
+    /// G1(wo, h).
+    #[inline(always)]
+    fn pair<V>(&self, wo: V, wi: V) -> (V, C::F, C::F)
+    where
+        V: Vector3<F = C::F>,
+        D: Distribution<V>,
+    {
+        let h = (wo + wi).normalize();
+        (h, self.distr.d(h), self.distr.g1(wo, h))
+    }
+
+    /// f of a pair (h, D(h), G1(wo, h)), given T(θo) and T(θi): the coating's microfacet
+    /// reflection plus the base seen through it.
+    #[inline(always)]
+    fn value<V>(&self, wo: V, wi: V, (h, d, g1_o): (V, C::F, C::F), t_o: C::F, t_i: C::F) -> C
+    where
+        V: Vector3<F = C::F>,
+        D: Distribution<V>,
+    {
+        let one = C::F::splat(1.0);
+        let f = fresnel_dielectric_lanes(wo.dot(h), self.eta);
+        let g = g1_o * self.distr.g1(wi, h);
+        let spec = self
+            .specular_reflectance
+            .scale(f * d * g / (C::F::splat(4.0) * wo.z() * wi.z()));
+        let (rho, r_int) = (self.diffuse_reflectance, self.internal_reflectance);
+        let mut base = rho.div(one - r_int);
+        if C::F::any(self.nonlinear) {
+            let (x, y, z) = (rho.x(), rho.y(), rho.z());
+            let nonlinear = C::new(
+                x / (one - x * r_int),
+                y / (one - y * r_int),
+                z / (one - z * r_int),
+            );
+            base = C::select(self.nonlinear, nonlinear, base);
+        }
+        spec + base.scale(C::F::splat(FRAC_1_PI) * self.inv_eta2 * t_o * t_i)
+    }
+
+    /// The pdf of a pair (h, D(h), G1(wo, h)), given the specular lobe's probability: the
+    /// mixture of visible normals reflected and the cosine.
+    #[inline(always)]
+    fn density<V: Vector3<F = C::F>>(
+        &self,
+        wo: V,
+        wi: V,
+        (_, d, g1_o): (V, C::F, C::F),
+        ps: C::F,
+    ) -> C::F {
+        let one = C::F::splat(1.0);
+        let spec = d * g1_o / (C::F::splat(4.0) * wo.z());
+        ps * spec + (one - ps) * cosine_hemisphere_pdf_lanes(wi.z())
+    }
+
+    /// f(wo, wi) and the pdf of sampling wi: zero unless both directions are above the
+    /// surface.
+    #[inline(always)]
+    pub fn eval_pdf_lanes<V>(&self, wo: V, wi: V) -> (C, C::F)
+    where
+        V: Vector3<F = C::F>,
+        D: Distribution<V>,
+    {
+        let zero = C::F::zero();
+        let none = C::new(zero, zero, zero);
+        let ok = !wo.z().le(zero) & !wi.z().le(zero);
+        if !C::F::any(ok) {
+            return (none, zero);
+        }
+        let pair = self.pair(wo, wi);
+        let t_o = self.transmittance(wo.z());
+        let f = self.value(wo, wi, pair, t_o, self.transmittance(wi.z()));
+        let pdf = self.density(wo, wi, pair, self.prob_specular(t_o));
+        (C::select(ok, f, none), C::F::select(ok, pdf, zero))
+    }
+
+    /// f(wo, wi) alone ([`Coated::eval_pdf_lanes`]'s).
+    #[inline(always)]
+    pub fn eval_lanes<V>(&self, wo: V, wi: V) -> C
+    where
+        V: Vector3<F = C::F>,
+        D: Distribution<V>,
+    {
+        self.eval_pdf_lanes(wo, wi).0
+    }
+
+    /// The pdf alone ([`Coated::eval_pdf_lanes`]'s).
+    #[inline(always)]
+    pub fn pdf_lanes<V>(&self, wo: V, wi: V) -> C::F
+    where
+        V: Vector3<F = C::F>,
+        D: Distribution<V>,
+    {
+        self.eval_pdf_lanes(wo, wi).1
+    }
+
+    /// A direction for the numbers `u1` (the lobe) and (`ux`, `uy`): the direction, the
+    /// weight f·cos θi/pdf, the pdf, and the lanes where there is a sample.
+    #[inline(always)]
+    pub fn sample_lanes<V>(&self, wo: V, u1: C::F, ux: C::F, uy: C::F) -> (V, C, C::F, Mask<V>)
+    where
+        V: Vector3<F = C::F>,
+        D: Distribution<V>,
+    {
+        let zero = C::F::zero();
+        let above = !wo.z().le(zero);
+        if !C::F::any(above) {
+            return (wo, C::new(zero, zero, zero), zero, above);
+        }
+        let t_o = self.transmittance(wo.z());
+        let ps = self.prob_specular(t_o);
+        let specular = u1.lt(ps);
+        let mut wi = wo;
+        if C::F::any(specular) {
+            wi = reflect_about_lanes(wo, self.distr.sample_visible(wo, ux, uy));
+        }
+        if C::F::any(!specular) {
+            wi = V::select(specular, wi, cosine_hemisphere(ux, uy));
+        }
+        // The pdf and f as `eval_pdf_lanes` computes them, T(θo) looked up once.
+        let pair = self.pair(wo, wi);
+        let below = wi.z().le(zero);
+        let pdf = C::F::select(below, zero, self.density(wo, wi, pair, ps));
+        // (A NaN pdf has no sample.)
+        let ok = above & pdf.gt(zero);
+        let f = self.value(wo, wi, pair, t_o, self.transmittance(wi.z()));
+        let f = C::select(below, C::new(zero, zero, zero), f);
+        (wi, f.scale(wi.z() / pdf), pdf, ok)
+    }
+}
+
+/// A table of [`TRANSMITTANCE_RES`] values at evenly spaced cos θ in [0, 1], starting at
+/// `first` in `values`, linearly interpolated at `cos_theta` (Mitsuba's `lerp_gather`).
+#[inline(always)]
+pub fn lerp_table<F: Float>(values: &[f32], first: F, cos_theta: F) -> F {
+    let k = F::splat;
+    let x = cos_theta * k((TRANSMITTANCE_RES - 1) as f32);
+    // (`max_num` takes NaN to 0.)
+    let i = x
+        .max_num(F::zero())
+        .trunc()
+        .min_num(k((TRANSMITTANCE_RES - 2) as f32));
+    let t = x - i;
+    let (a, b) = (
+        F::gather(values, first + i),
+        F::gather(values, first + i + k(1.0)),
+    );
+    a + (b - a) * t
 }

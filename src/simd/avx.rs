@@ -177,4 +177,16 @@ impl Float for F8 {
             (F8(m), F8(e))
         }
     }
+    #[inline(always)]
+    fn trunc(self) -> Self {
+        F8(unsafe { _mm256_round_ps::<{ _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC }>(self.0) })
+    }
+    /// Lane by lane (AVX has no gather).
+    #[inline(always)]
+    fn gather(table: &[f32], index: Self) -> Self {
+        let mut a = [0.0; 8];
+        unsafe { _mm256_storeu_ps(a.as_mut_ptr(), index.0) };
+        let a = a.map(|i| f32::gather(table, i));
+        F8(unsafe { _mm256_loadu_ps(a.as_ptr()) })
+    }
 }

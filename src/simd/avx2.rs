@@ -168,6 +168,14 @@ impl Float for F {
         let [(m0, e0), (m1, e1)] = both!(h => self.0[h].frexp());
         (F([m0, m1]), F([e0, e1]))
     }
+    #[inline(always)]
+    fn trunc(self) -> F {
+        F(both!(h => self.0[h].trunc()))
+    }
+    #[inline(always)]
+    fn gather(table: &[f32], index: F) -> F {
+        F(both!(h => F8::gather(table, index.0[h])))
+    }
 }
 
 impl Sixteen for F {

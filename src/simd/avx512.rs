@@ -145,6 +145,26 @@ impl Float for F {
             (F(_mm512_castsi512_ps(m)), F(e))
         }
     }
+    #[inline(always)]
+    fn trunc(self) -> F {
+        F(unsafe { _mm512_roundscale_ps::<{ _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC }>(self.0) })
+    }
+    /// One gather; NaN (converted to `i32::MIN`) and negatives clamped to 0, as `as usize`
+    /// takes them.
+    #[inline(always)]
+    fn gather(table: &[f32], index: F) -> F {
+        let last = i32::try_from(table.len()).expect("a table below 2^31 entries") - 1;
+        assert!(last >= 0, "an empty table");
+        unsafe {
+            let i = _mm512_cvttps_epi32(index.0);
+            let i = _mm512_min_epi32(
+                _mm512_max_epi32(i, _mm512_setzero_si512()),
+                _mm512_set1_epi32(last),
+            );
+            // SAFETY: every index is in 0..table.len().
+            F(_mm512_i32gather_ps::<4>(i, table.as_ptr()))
+        }
+    }
 }
 
 impl Sixteen for F {

@@ -1,12 +1,13 @@
 //! BSDF sampling, lane by lane: `Material::orient` and `Material::sample` for the
-//! Lambertian, mirror, glass, rough conductor and rough dielectric BSDFs, over the warps,
-//! Fresnel terms and BSDFs of [`crate::material`] instanced for the lanes.
+//! Lambertian, mirror, glass, rough conductor, rough dielectric and rough plastic BSDFs,
+//! over the warps, Fresnel terms and BSDFs of [`crate::material`] instanced for the lanes.
 
 use super::general::General;
 use super::simd::{F, M, V3};
 use super::LaneMask;
 use crate::material::microfacet::Either;
 use crate::material::rough_conductor::RoughConductor;
+use crate::material::rough_plastic::Coated;
 use crate::material::{dielectric, lambert, rough_dielectric, TransportMode};
 use crate::simd::{Float, Vector3};
 
@@ -24,14 +25,17 @@ pub struct Sample {
     pub glossy: M,
 }
 
-/// The rough lanes of a vertex, where any lane has one: those of rough conductors (`metal`)
-/// and of rough dielectrics (`glass`, of relative index `eta`, unit factors), and the
-/// conductors, whose distribution serves both.
-pub struct Microfacets {
+/// The rough lanes of a vertex, where any lane has one: those of rough conductors (`metal`),
+/// of rough dielectrics (`glass`, of relative index `eta`, unit factors) and of rough
+/// plastics (`plastic`, their BSDFs `coated` where any lane has one), and the conductors,
+/// whose distribution serves all three.
+pub struct Microfacets<'a> {
     pub metal: M,
     pub glass: M,
+    pub plastic: M,
     pub conductor: RoughConductor<Either<F>, V3>,
     pub eta: F,
+    pub coated: Option<Coated<'a, Either<F>, V3>>,
 }
 
 /// The BSDF samples of lanes with Lambertian (`lambert`), mirror (`mirror`), glass
@@ -109,7 +113,7 @@ pub fn sample(
     let Some(r) = rough else {
         return s;
     };
-    s.glossy |= r.metal | r.glass;
+    s.glossy |= r.metal | r.glass | r.plastic;
     // Rough conductors on the side wo is on, and back (`Material::sample`'s flip).
     if r.metal.any() {
         let (wi, weight, pdf, ok) = r.conductor.sample_lanes(flip_z(wo, side), ux, uy);
@@ -117,6 +121,14 @@ pub fn sample(
         s.wi = V3::select(r.metal, flip_z(wi, side), s.wi);
         s.weight = V3::select(r.metal, weight, s.weight);
         s.pdf = F::select(r.metal, pdf, s.pdf);
+    }
+    // Rough plastics on the side wo is on, and back, as the conductors.
+    if let Some(c) = &r.coated {
+        let (wi, weight, pdf, ok) = c.sample_lanes(flip_z(wo, side), u1, ux, uy);
+        s.ok |= r.plastic & oriented & ok;
+        s.wi = V3::select(r.plastic, flip_z(wi, side), s.wi);
+        s.weight = V3::select(r.plastic, weight, s.weight);
+        s.pdf = F::select(r.plastic, pdf, s.pdf);
     }
     // Rough dielectrics, from either side.
     if r.glass.any() {

@@ -1,4 +1,4 @@
-//! The materials the lanes do not shade in their registers (plastics, principled, Oren–Nayar,
+//! The materials the lanes do not shade in their registers (plastic, principled, Oren–Nayar,
 //! smooth conductors, blends, normal and bump maps, textured roughness, glass of other
 //! factors): each lane's [`Material`] at its hit, the one the path tracer finds there, its
 //! `eval_pdf` and `sample` called a lane at a time. The maths is the path tracer's own, so

@@ -31,7 +31,8 @@
 //! numbers from the same sampler ([`rng`]), the same hits, and the same shading maths, which
 //! is written once over the lane traits of [`crate::simd`] (frames, warps, Fresnel,
 //! refraction, MIS, ray offsets, hit points, light samples, the Lambertian, glass, rough
-//! conductor and rough dielectric BSDFs) and instanced here with sixteen lanes, there with
+//! conductor, rough dielectric and rough plastic BSDFs) and instanced here with sixteen
+//! lanes, there with
 //! one, or is the path tracer's own `Material` called a lane at a time ([`general`]). A
 //! sample's value is therefore the same
 //! bits whichever of the two renders it, and so is the image (the film's fixed-point sums do
@@ -48,11 +49,12 @@
 //! directional, environments) each lane asks of `Lights`, a lane at a time, with the path
 //! tracer's own functions ([`lights`]), and those scenes are traced through the scene's
 //! queries. The lanes shade in their registers the Lambertian, mirror, smooth glass, rough
-//! conductor and rough glass (Beckmann or GGX, isotropic or not; glass of unit factors)
-//! and black materials, their colours constant or textured (looked up at each hit as
-//! `Scene::material_at` does, so not with brute force; a rough material's not), with no
-//! normal or bump map; every other material (`GENERAL`: the plastics, principled,
-//! Oren–Nayar, smooth conductors, blends, maps, textured roughness) by calling each lane's
+//! conductor, rough glass (Beckmann or GGX, isotropic or not; glass of unit factors), rough
+//! plastic (each lane reading its coating's table) and black materials, their colours
+//! constant or textured (looked up at each hit as `Scene::material_at` does, so not with
+//! brute force; a rough material's not), with no normal or bump map; every other material
+//! (`GENERAL`: the smooth plastic, principled, Oren–Nayar, smooth conductors, blends, maps,
+//! textured roughness and rough materials' textured colours) by calling each lane's
 //! `Material` ([`general`]), which brute force takes where it is the same at every hit.
 //! Other integrators, and any CPU without AVX2, BMI1, BMI2 and POPCNT, render with the
 //! stream ([`super::stream`]) or `path::li`.
@@ -69,7 +71,7 @@ mod avx512;
 use crate::camera::Camera;
 use crate::film::PixelSums;
 use crate::integrator::{IntegratorKind, RussianRoulette};
-use crate::material::{Bsdf, MicrofacetType};
+use crate::material::{Bsdf, MicrofacetType, RoughPlastic};
 use crate::render::{self, RenderSettings, RenderStats, TilePixel};
 use crate::sampler::SamplerKind;
 use crate::scene::{Scene, META_EMITTER, META_MATERIAL, SPHERE};
@@ -124,10 +126,11 @@ const MIRROR: u32 = 1;
 const GLASS: u32 = 2;
 const BLACK: u32 = 3;
 /// A rough conductor, a rough dielectric, any other material (its `Material` called a lane
-/// at a time: [`general`])...
+/// at a time: [`general`]), a rough plastic...
 const ROUGH: u32 = 4;
 const ROUGH_GLASS: u32 = 5;
 const GENERAL: u32 = 6;
+const ROUGH_PLASTIC: u32 = 7;
 /// ...whether it is two-sided, whether it emits, and whether a rough material's microfacets
 /// are Beckmann's (else GGX).
 const TWO_SIDED: u32 = 8;
@@ -159,6 +162,8 @@ pub struct Wavefront<'a> {
     flags: [u32; 64],
     /// A rough conductor's roughness and complex index of refraction.
     rough: RoughTables,
+    /// The rough plastics' coating transmittance tables, one after another (`Coat::first`).
+    coatings: Vec<f32>,
     /// Each `GENERAL` material as every hit sees it, where that is the same at every hit
     /// (no texture, blend, normal or bump map), by material index.
     resolved: Vec<Option<crate::material::Material>>,
@@ -236,6 +241,7 @@ struct Shading {
     colour: [f32; 3],
     eta: f32,
     rough: Rough,
+    coat: Coat,
     textured: bool,
     masked: bool,
 }
@@ -255,6 +261,48 @@ impl Rough {
         eta: [0.0; 3],
         k: [1.0; 3],
     };
+}
+
+/// A rough plastic's coating (its roughness is its [`Rough`]'s, its η and diffuse
+/// reflectance the material's `eta` and `colour`), as `rough_plastic::Coated` reads it;
+/// other materials' are never read.
+#[derive(Clone, Copy, Debug)]
+struct Coat {
+    specular: [f32; 3],
+    nonlinear: bool,
+    weight: f32,
+    inv_eta2: f32,
+    /// Where its transmittance table starts in [`Wavefront::coatings`]...
+    first: f32,
+    /// ...and that table, until it is placed there.
+    table: &'static [f32],
+    internal_reflectance: f32,
+}
+
+impl Coat {
+    const NONE: Coat = Coat {
+        specular: [0.0; 3],
+        nonlinear: false,
+        weight: 0.0,
+        inv_eta2: 1.0,
+        first: 0.0,
+        table: &[],
+        internal_reflectance: 0.0,
+    };
+
+    /// A rough plastic's, its table yet to be placed.
+    fn of(b: &RoughPlastic) -> Coat {
+        let c = b.coated();
+        Coat {
+            specular: c.specular_reflectance.into(),
+            nonlinear: c.nonlinear,
+            weight: c.specular_sampling_weight,
+            inv_eta2: c.inv_eta2,
+            first: 0.0,
+            table: c.transmittance,
+            internal_reflectance: c.internal_reflectance,
+        }
+    }
 }
 
 /// [`Rough`] by primitive, for [`Trace::Lanes`]' lookups.
@@ -285,6 +333,7 @@ impl Shading {
             colour: [0.0; 3],
             eta: 1.0,
             rough: Rough::NONE,
+            coat: Coat::NONE,
             textured: material.varies() || material.perturbs(),
             masked: material.opacity.is_some(),
         };
@@ -293,7 +342,9 @@ impl Shading {
         };
         // (Glass's textured factors would not be the unit ones the lanes assume, and a
         // rough material's textured roughness is not looked up.)
-        if material.perturbs() || textured && matches!(kind, GLASS | ROUGH | ROUGH_GLASS) {
+        if material.perturbs()
+            || textured && matches!(kind, GLASS | ROUGH | ROUGH_GLASS | ROUGH_PLASTIC)
+        {
             return general;
         }
         let (rough, distr) = match &material.bsdf {
@@ -312,7 +363,18 @@ impl Shading {
                 },
                 Some(b.distr),
             ),
+            Bsdf::RoughPlastic(b) => (
+                Rough {
+                    alpha: [b.distr.alpha_u, b.distr.alpha_v],
+                    ..Rough::NONE
+                },
+                Some(b.distr),
+            ),
             _ => (Rough::NONE, None),
+        };
+        let coat = match &material.bsdf {
+            Bsdf::RoughPlastic(b) => Coat::of(b),
+            _ => Coat::NONE,
         };
         let two_sided = if material.two_sided { TWO_SIDED } else { 0 };
         let beckmann = match distr {
@@ -324,6 +386,7 @@ impl Shading {
             colour,
             eta,
             rough,
+            coat,
             textured,
             masked: material.opacity.is_some(),
         }
@@ -336,6 +399,7 @@ impl Shading {
             Bsdf::Lambert(b) => (LAMBERT, b.albedo, 1.0),
             Bsdf::Mirror(b) => (MIRROR, b.reflectance, 1.0),
             Bsdf::RoughConductor(b) => (ROUGH, b.specular_reflectance, 1.0),
+            Bsdf::RoughPlastic(b) => (ROUGH_PLASTIC, b.diffuse_reflectance, b.eta),
             // (Rough glass of factors other than 1 takes the scalar path.)
             Bsdf::RoughDielectric(b)
                 if b.specular_reflectance == crate::Color::ONE
@@ -372,6 +436,31 @@ impl Shading {
         }
         Self::bsdf(&material.bsdf_at(textures, uv)).map_or(self.colour, |(_, c, _)| c)
     }
+}
+
+/// The rough plastics' coating tables one after another, each once (plastics of one
+/// distribution, α and η share theirs), and each plastic's `Coat::first` set to where its
+/// table starts.
+fn place_coatings(materials: &mut [Shading]) -> Vec<f32> {
+    let mut all = Vec::new();
+    let mut placed: Vec<(*const f32, f32)> = Vec::new();
+    for c in materials
+        .iter_mut()
+        .map(|m| &mut m.coat)
+        .filter(|c| !c.table.is_empty())
+    {
+        let at = c.table.as_ptr();
+        c.first = match placed.iter().find(|p| p.0 == at) {
+            Some(&(_, first)) => first,
+            None => {
+                let first = all.len() as f32;
+                all.extend_from_slice(c.table);
+                placed.push((at, first));
+                first
+            }
+        };
+    }
+    all
 }
 
 /// A triangle's first vertex and edges `p1 − p0`, `p2 − p0` (as `Triangle::intersect`
@@ -422,7 +511,12 @@ impl<'a> Wavefront<'a> {
             return None;
         }
         let planar = scene.lights.single_planar();
-        let materials: Vec<Shading> = scene.materials.iter().map(Shading::of).collect();
+        let mut materials: Vec<Shading> = scene.materials.iter().map(Shading::of).collect();
+        let coatings = place_coatings(&mut materials);
+        // (The lanes index the tables in f32, exact below 2²⁴.)
+        if coatings.len() >= 1 << 24 {
+            return None;
+        }
         let resolved = (scene.materials.iter().zip(&materials))
             .map(|(m, sh)| {
                 (sh.flags & KIND == GENERAL && !sh.textured)
@@ -448,6 +542,7 @@ impl<'a> Wavefront<'a> {
                 eta: [[0.0; 64]; 3],
                 k: [[1.0; 64]; 3],
             },
+            coatings,
             resolved,
             light: planar.map(|planar| Light {
                 a: planar.a.into(),

@@ -33,7 +33,7 @@ pub struct Vertex<'a> {
     pub frame: Frame<V3>,
     pub wo: V3,
     pub albedo: V3,
-    pub rough: Option<&'a Microfacets>,
+    pub rough: Option<&'a Microfacets<'a>>,
     pub general: Option<&'a General<'a>>,
     pub oriented: M,
     pub side: F,
@@ -224,6 +224,12 @@ fn eval_pdf(v: &Vertex, wil: V3) -> (V3, F) {
             let (wo, wi) = (flip_z(v.wo, v.side), flip_z(wil, v.side));
             f = V3::select(r.metal, r.conductor.eval_lanes(wo, wi), f);
             bsdf_pdf = F::select(r.metal, r.conductor.pdf_lanes(wo, wi), bsdf_pdf);
+        }
+        if let Some(c) = &r.coated {
+            let (wo, wi) = (flip_z(v.wo, v.side), flip_z(wil, v.side));
+            let (cf, pdf) = c.eval_pdf_lanes(wo, wi);
+            f = V3::select(r.plastic, cf, f);
+            bsdf_pdf = F::select(r.plastic, pdf, bsdf_pdf);
         }
         if r.glass.any() {
             let distr = &r.conductor.distr;

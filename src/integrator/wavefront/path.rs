@@ -12,9 +12,11 @@ use super::bsdf::Microfacets;
 use super::general::{At, General};
 use super::lights::Prev;
 use super::{BECKMANN, BLACK, EMITTER, GENERAL, GLASS, KIND, LAMBERT, MIRROR, ROUGH, ROUGH_GLASS};
+use super::ROUGH_PLASTIC;
 use super::TWO_SIDED;
 use crate::material::microfacet::Either;
 use crate::material::rough_conductor::RoughConductor;
+use crate::material::rough_plastic::Coated;
 use crate::film::PixelSums;
 use crate::geometry::ray::offset_ray_origin;
 use crate::geometry::sphere::surface_point;
@@ -22,7 +24,7 @@ use crate::geometry::triangle::barycentric_point;
 use crate::geometry::Frame;
 use crate::light::area_pdf;
 use crate::material::sampling::power_heuristic_lanes;
-use crate::simd::{Float, Vector3};
+use crate::simd::{lanes_of, Float, Vector3};
 use crate::render::{RenderStats, TilePixel};
 
 /// What a step reads of the lanes' hits: the lanes that hit something, and at their hits
@@ -110,6 +112,50 @@ impl Wavefront<'_> {
             eta,
             k,
             specular_reflectance: sf.colour,
+        }
+    }
+
+    /// The rough plastics at the hits of lanes `lanes` of `sf` (`hits` with [`Trace::Scene`]),
+    /// of distributions `distr` ([`Wavefront::conductor`]'s): each lane's coating read from
+    /// its material's. Lanes without one hold the first table and values no lane reads.
+    #[inline(always)]
+    fn coated(
+        &self,
+        sf: &Surface,
+        hits: &[Option<Interaction>; 16],
+        lanes: M,
+        distr: Either<F>,
+    ) -> Coated<'_, Either<F>, V3> {
+        let mut prims = [0u32; 16];
+        sf.prim.store(&mut prims);
+        let (mut specular, mut v) = ([[0f32; 16]; 3], [[0f32; 16]; 4]);
+        let mut nonlinear: Bits = 0;
+        for l in lanes_of(u32::from(lanes.bits())) {
+            let index = match (&self.trace, &hits[l]) {
+                (Trace::Scene, Some(si)) => si.material as usize,
+                _ => (self.scene.meta[prims[l] as usize] & META_MATERIAL) as usize,
+            };
+            let c = &self.materials[index].coat;
+            for (s, &x) in specular.iter_mut().zip(&c.specular) {
+                s[l] = x;
+            }
+            let values = [c.weight, c.inv_eta2, c.first, c.internal_reflectance];
+            for (v, x) in v.iter_mut().zip(values) {
+                v[l] = x;
+            }
+            nonlinear |= (c.nonlinear as Bits) << l;
+        }
+        Coated {
+            distr,
+            eta: sf.eta,
+            diffuse_reflectance: sf.colour,
+            specular_reflectance: V3::load(&specular),
+            nonlinear: M::from_bits(nonlinear),
+            specular_sampling_weight: F::load(&v[0]),
+            inv_eta2: F::load(&v[1]),
+            transmittance: &self.coatings,
+            first: F::load(&v[2]),
+            internal_reflectance: F::load(&v[3]),
         }
     }
 
@@ -290,12 +336,21 @@ impl Wavefront<'_> {
         let frame = Frame::from_normal(sf.ns);
         let wo = frame.to_local(nd);
         let (lambert, mirror, glass) = (kind(LAMBERT), kind(MIRROR), kind(GLASS));
-        let (metal, frosted) = (kind(ROUGH), kind(ROUGH_GLASS));
-        let rough = if (metal | frosted).any() {
+        let (metal, frosted, plastic) = (kind(ROUGH), kind(ROUGH_GLASS), kind(ROUGH_PLASTIC));
+        let rough = if (metal | frosted | plastic).any() {
+            let conductor = self.conductor(&sf, &st.hits);
+            // (Not `then` and a closure: it would be compiled without the lanes' features.)
+            let coated = if plastic.any() {
+                Some(self.coated(&sf, &st.hits, plastic, conductor.distr))
+            } else {
+                None
+            };
             Some(Microfacets {
                 metal,
                 glass: frosted,
-                conductor: self.conductor(&sf, &st.hits),
+                plastic,
+                coated,
+                conductor,
                 eta: sf.eta,
             })
         } else {
@@ -313,7 +368,8 @@ impl Wavefront<'_> {
         // materials with a non-delta lobe): with one light sample, its shadow ray and the
         // two values `l += β·lit` can add (β times the sample's contribution, or β·0 if it
         // is blocked) wait for `shadows`.
-        let non_delta = lambert | metal | frosted | general.as_ref().map_or(M::none(), |g| g.glossy);
+        let non_delta = lambert | metal | frosted | plastic;
+        let non_delta = non_delta | general.as_ref().map_or(M::none(), |g| g.glossy);
         // (Without lights, `PathState::step` samples none and draws no numbers for them.)
         let nee = if self.scene.lights.is_empty() {
             M::none()
