@@ -131,9 +131,11 @@ impl Wavefront<'_> {
         let (mut specular, mut v) = ([[0f32; 16]; 3], [[0f32; 16]; 4]);
         let mut nonlinear: Bits = 0;
         for l in lanes_of(u32::from(lanes.bits())) {
-            let index = match (&self.trace, &hits[l]) {
+            let index = match (self.trace, &hits[l]) {
                 (Trace::Scene, Some(si)) => si.material as usize,
-                _ => (self.scene.meta[prims[l] as usize] & META_MATERIAL) as usize,
+                (Trace::Lanes, _) => (self.scene.meta[prims[l] as usize] & META_MATERIAL) as usize,
+                // (Every lane with a material has a hit.)
+                (Trace::Scene, None) => continue,
             };
             let c = &self.materials[index].coat;
             for (s, &x) in specular.iter_mut().zip(&c.specular) {
