@@ -24,7 +24,7 @@
 //! each round in a new order, and each figure is the minimum over the rounds (the machine is
 //! shared), with the spread (max/min) beside it. Every batch's answers are checked equal to
 //! the one-at-a-time ones, bit for bit, before anything is timed. `--only VARIANT` traces
-//! with that variant only, once (`valgrind --tool=callgrind
+//! with that variant only (or `packets`, the camera packets), once (`valgrind --tool=callgrind
 //! --toggle-collect='*intersect_many::time*'`). `--dump DIR` also writes each scene's rays to
 //! `DIR/STEM-{camera,bounces,first,shadow}.f32` (seven little-endian `f32` a ray: origin,
 //! direction, end distance; unshuffled, unrepeated), for `bench/embree_rays.py`, which times Mitsuba 3's Embree on the
@@ -286,13 +286,14 @@ fn main() {
                 continue;
             }
             if let Some(v) = &only {
-                let f = VARIANTS
-                    .iter()
-                    .find(|(n, _)| n == v)
-                    .expect("a variant's name")
-                    .1;
+                // `packets`: the camera rays as the renderers' packets of sixteen.
+                let (f, b) = match VARIANTS.iter().find(|(n, _)| n == v) {
+                    Some(&(_, f)) => (f, batch),
+                    None if v == "packets" => (packets as Trace, PACKET),
+                    None => panic!("--only {v}: not a variant (1, auto, 4, 8, 16, 32, packets)"),
+                };
                 let mut out = vec![None; rays.len()];
-                let t = time(&scene, rays, batch, f, &mut out);
+                let t = time(&scene, rays, b, f, &mut out);
                 println!(
                     "  {name}: {} rays, {v}: {:.1} ns/ray",
                     rays.len(),
@@ -391,11 +392,10 @@ fn shadows(
     only: Option<&str>,
 ) {
     if let Some(v) = only {
-        let f = SHADOW_VARIANTS
-            .iter()
-            .find(|(n, _)| *n == v)
-            .expect("a variant")
-            .1;
+        // (The camera packets have no shadow variant.)
+        let Some(&(_, f)) = SHADOW_VARIANTS.iter().find(|(n, _)| *n == v) else {
+            return;
+        };
         let s = time_shadows(scene, rays, t, batch, f);
         println!(
             "  shadow: {} rays, {v}: {:.1} ns/ray",

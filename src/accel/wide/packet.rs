@@ -248,6 +248,23 @@ mod avx {
                 l16.unwrap_unchecked().t_max = _mm512_loadu_ps(t.as_ptr());
             }
         }
+
+        /// The lanes whose `t_max`, widened as the box test widens it, is not below `near`:
+        /// those that still reach a box they entered at `near`.
+        #[inline(always)]
+        unsafe fn reaching<const WIDE: bool>(&self, l16: Option<&Lanes16>, near: f32) -> u32 {
+            if WIDE {
+                let far = _mm512_mul_ps(l16.unwrap_unchecked().t_max, _mm512_set1_ps(WIDEN));
+                return u32::from(_mm512_cmp_ps_mask::<_CMP_LE_OQ>(_mm512_set1_ps(near), far));
+            }
+            let mut m = 0;
+            for h in 0..HALVES {
+                let far = _mm256_mul_ps(self.t_max[h], _mm256_set1_ps(WIDEN));
+                let le = _mm256_cmp_ps::<_CMP_LE_OQ>(_mm256_set1_ps(near), far);
+                m |= (_mm256_movemask_ps(le) as u32) << (8 * h);
+            }
+            m
+        }
     }
 
     /// A traversal of a packet through the tree (which answer it seeks, and what it does at
@@ -538,15 +555,7 @@ mod avx {
                     }
                     len -= 1;
                     let (c, m, near) = stack.get_unchecked(len).assume_init();
-                    let mut lanes = m;
-                    let mut resume = 0;
-                    while lanes != 0 {
-                        let lane = lanes.trailing_zeros() as usize;
-                        lanes &= lanes - 1;
-                        if near <= self.t_max[lane] * WIDEN {
-                            resume |= 1 << lane;
-                        }
-                    }
+                    let resume = m & l.reaching::<WIDE>(l16.as_deref(), near);
                     if resume != 0 {
                         (cur, mask) = (c, resume);
                         break;
