@@ -250,7 +250,8 @@ mod avx {
         }
 
         /// The lanes whose `t_max`, widened as the box test widens it, is not below `near`:
-        /// those that still reach a box they entered at `near`.
+        /// those that still reach a box they entered at `near`. (The registers hold the
+        /// walk's `t_max`: [`Lanes::set_t_max`] follows every leaf that lowered one.)
         #[inline(always)]
         unsafe fn reaching<const WIDE: bool>(&self, l16: Option<&Lanes16>, near: f32) -> u32 {
             if WIDE {
