@@ -111,6 +111,10 @@ pub trait Sixteen: Float {
     fn to_array(self) -> [f32; 16];
     /// The lanes of `m` as bits, bit i for lane i.
     fn bits(m: Self::Mask) -> u32;
+    /// The mask of the lanes whose bit is set in `bits` (bit i for lane i).
+    fn from_bits(bits: u32) -> Self::Mask;
+    /// `f32::next_up` of positive finite numbers: the next float up (one more in the bits).
+    fn next_up(self) -> Self;
     /// `first + i` in lane i.
     fn iota(first: f32) -> Self;
     /// The least lane of `t` (none NaN), and of the lanes that hold it the least `key`.

@@ -1,5 +1,6 @@
 //! Brute force for small scenes: every triangle tested against a single ray, sixteen at a
-//! time ([`TriangleBlock`]), and the few spheres one by one. No hierarchy at all.
+//! time ([`TriangleBlock`]), and the few spheres one by one. No hierarchy at all. Batches of
+//! sixteen rays take the transpose, each primitive against the rays in the lanes (`rays.rs`).
 //!
 //! Why: in a room of a few dozen triangles the BVH's work per ray is small, but it is
 //! branchy. Each node test and each triangle's early exit is a branch whose outcome varies
@@ -22,10 +23,13 @@
 //! the example scenes both ways), whichever kernel the CPU runs (AVX-512 or AVX, which give
 //! the same bits), and whether the integrator runs its portable or its x86-64-v3 code.
 
-use crate::geometry::triangle::{intersect_lanes_edges, LaneHits};
 use crate::geometry::triangle_block::{TriangleBlock, LANES};
-use crate::geometry::{Ray, Triangle};
+use crate::geometry::{Ray, Sphere, Triangle};
 use crate::simd::{avx2, avx512, Sixteen, Vector3, V3};
+
+mod rays;
+use rays::Tri;
+pub use rays::{Ball, Hits};
 
 /// Most triangles traced by brute force with AVX-512. `cargo bench --bench flat` found it
 /// faster than the BVH at every size up to this one (docs/performance.md).
@@ -65,16 +69,18 @@ pub struct Flat {
     blocks: Vec<TriangleBlock>,
     /// The scene's primitive index of each triangle, block by block, lane by lane.
     prims: Vec<u32>,
-    /// The scene's primitive indices of the spheres.
-    spheres: Vec<u32>,
+    /// The spheres, with the scene's primitive indices, in the order of those.
+    balls: Vec<Ball>,
+    /// The triangles again, each one's data together, for the rays in lanes (`rays.rs`).
+    tris: Vec<Tri>,
     kernel: Kernel,
 }
 
 impl Flat {
     /// The flat set over `triangles` (primitive index and triangle, in the scene's order)
-    /// and `spheres` (primitive indices); None where the scene is too large for brute force
+    /// and `spheres` (likewise); None where the scene is too large for brute force
     /// or the CPU lacks AVX.
-    pub fn new(triangles: &[(u32, Triangle)], spheres: Vec<u32>) -> Option<Flat> {
+    pub fn new(triangles: &[(u32, Triangle)], spheres: &[(u32, Sphere)]) -> Option<Flat> {
         let kernel = detect()?;
         let most = match kernel {
             Kernel::Avx512 => FLAT_MAX_TRIANGLES,
@@ -90,7 +96,7 @@ impl Flat {
     /// triangles); None where the CPU does not run `kernel`, or there is nothing to test.
     pub fn with_kernel(
         triangles: &[(u32, Triangle)],
-        spheres: Vec<u32>,
+        spheres: &[(u32, Sphere)],
         kernel: Kernel,
     ) -> Option<Flat> {
         assert!(triangles.len() <= FLAT_MAX_SLOTS);
@@ -104,16 +110,30 @@ impl Flat {
         Some(Flat {
             blocks,
             prims: triangles.iter().map(|&(p, _)| p).collect(),
-            spheres,
+            tris: triangles.iter().map(|(p, t)| Tri::new(*p, t)).collect(),
+            balls: spheres
+                .iter()
+                .map(|&(prim, s)| Ball {
+                    center: s.center,
+                    r2: s.radius * s.radius,
+                    prim,
+                })
+                .collect(),
             kernel,
         })
+    }
+
+    /// Whether the set holds spheres.
+    pub fn has_spheres(&self) -> bool {
+        !self.balls.is_empty()
     }
 
     /// Bytes of the blocks and index lists.
     pub fn memory_bytes(&self) -> usize {
         std::mem::size_of_val(&self.blocks[..])
             + std::mem::size_of_val(&self.prims[..])
-            + std::mem::size_of_val(&self.spheres[..])
+            + std::mem::size_of_val(&self.balls[..])
+            + std::mem::size_of_val(&self.tris[..])
     }
 
     /// The lanes of block `k` that hold triangles.
@@ -164,9 +184,9 @@ impl Flat {
         F: FnMut(usize, f32) -> Option<(f32, f32, f32)>,
     {
         let mut best = (usize::MAX, t_max, 0.0, 0.0);
-        for &p in &self.spheres {
-            if let Some((t, u, v)) = hit(p as usize, best.1) {
-                best = (p as usize, t, u, v);
+        for b in &self.balls {
+            if let Some((t, u, v)) = hit(b.prim as usize, best.1) {
+                best = (b.prim as usize, t, u, v);
             }
         }
         best
@@ -335,9 +355,9 @@ impl Flat {
         F: FnMut(usize, f32) -> Option<(f32, f32, f32)>,
     {
         if self
-            .spheres
+            .balls
             .iter()
-            .any(|&p| hit(p as usize, t_max).is_some())
+            .any(|b| hit(b.prim as usize, t_max).is_some())
         {
             return true;
         }
@@ -353,10 +373,9 @@ impl Flat {
     }
 
     /// [`Flat::intersect`] of sixteen rays at once, each up to infinity, the same answers:
-    /// the rays in the lanes and each triangle broadcast in turn, the transpose of the blocks'
-    /// test (as the wavefront's brute force), which a batch of rays (`Scene::intersect_many`)
-    /// affords. `hit(k, prim, t_max)` is ray k's own test of a primitive: it decides the
-    /// spheres and the lanes near an edge.
+    /// the rays in the lanes and each primitive broadcast in turn ([`Flat::closest_lanes`]),
+    /// which a batch of rays (`Scene::intersect_many`) affords. `hit(ray, prim, t_max)` is
+    /// the primitive's own test: it decides the lanes near an edge.
     #[inline(always)]
     pub fn intersect_rays<F>(
         &self,
@@ -364,7 +383,7 @@ impl Flat {
         hit: F,
     ) -> [Option<(usize, f32, f32, f32)>; RAYS]
     where
-        F: FnMut(usize, usize, f32) -> Option<(f32, f32, f32)>,
+        F: FnMut(&Ray, usize, f32) -> Option<(f32, f32, f32)>,
     {
         // SAFETY: the kernel was chosen for the CPU's features (`detect`).
         unsafe {
@@ -380,7 +399,7 @@ impl Flat {
     #[inline(always)]
     pub fn occluded_rays<F>(&self, rays: &[Ray; RAYS], t_max: &[f32; RAYS], hit: F) -> u32
     where
-        F: FnMut(usize, usize, f32) -> Option<(f32, f32, f32)>,
+        F: FnMut(&Ray, usize, f32) -> Option<(f32, f32, f32)>,
     {
         // SAFETY: as above.
         unsafe {
@@ -401,7 +420,7 @@ impl Flat {
         hit: F,
     ) -> [Option<(usize, f32, f32, f32)>; RAYS]
     where
-        F: FnMut(usize, usize, f32) -> Option<(f32, f32, f32)>,
+        F: FnMut(&Ray, usize, f32) -> Option<(f32, f32, f32)>,
     {
         self.nearest_of_rays::<avx512::F, F>(rays, hit)
     }
@@ -416,7 +435,7 @@ impl Flat {
         hit: F,
     ) -> [Option<(usize, f32, f32, f32)>; RAYS]
     where
-        F: FnMut(usize, usize, f32) -> Option<(f32, f32, f32)>,
+        F: FnMut(&Ray, usize, f32) -> Option<(f32, f32, f32)>,
     {
         self.nearest_of_rays::<avx2::F, F>(rays, hit)
     }
@@ -427,7 +446,7 @@ impl Flat {
     #[target_feature(enable = "avx,avx512f")]
     unsafe fn occluded_rays16<F>(&self, rays: &[Ray; RAYS], t_max: &[f32; RAYS], hit: F) -> u32
     where
-        F: FnMut(usize, usize, f32) -> Option<(f32, f32, f32)>,
+        F: FnMut(&Ray, usize, f32) -> Option<(f32, f32, f32)>,
     {
         self.blocked_rays::<avx512::F, F>(rays, t_max, hit)
     }
@@ -438,111 +457,41 @@ impl Flat {
     #[target_feature(enable = "avx")]
     unsafe fn occluded_rays8<F>(&self, rays: &[Ray; RAYS], t_max: &[f32; RAYS], hit: F) -> u32
     where
-        F: FnMut(usize, usize, f32) -> Option<(f32, f32, f32)>,
+        F: FnMut(&Ray, usize, f32) -> Option<(f32, f32, f32)>,
     {
         self.blocked_rays::<avx2::F, F>(rays, t_max, hit)
     }
 
-    /// [`Flat::intersect_rays`] in the lanes of `T`: per ray the spheres as
-    /// [`Flat::intersect`] tests them, then every triangle against all the rays, each lane
-    /// keeping the nearest (a later slot only where strictly nearer, so of equal ones the
-    /// first, the order `Flat::intersect`'s reduction gives), then each ray's lanes near an
-    /// edge and the spheres' hit as there.
+    /// [`Flat::intersect_rays`] in the lanes of `T` ([`Flat::closest_lanes`]).
     #[inline(always)]
-    fn nearest_of_rays<T: Sixteen, F>(
+    fn nearest_of_rays<T: Sixteen, H>(
         &self,
         rays: &[Ray; RAYS],
-        mut hit: F,
+        hit: H,
     ) -> [Option<(usize, f32, f32, f32)>; RAYS]
     where
-        F: FnMut(usize, usize, f32) -> Option<(f32, f32, f32)>,
+        H: FnMut(&Ray, usize, f32) -> Option<(f32, f32, f32)>,
     {
-        let mut sphere = [(usize::MAX, f32::INFINITY, 0.0, 0.0); RAYS];
-        let mut bound = [f32::INFINITY; RAYS];
-        if !self.spheres.is_empty() {
-            for (k, s) in sphere.iter_mut().enumerate() {
-                *s = self.nearest_sphere(f32::INFINITY, &mut |p, t| hit(k, p, t));
-                bound[k] = Self::triangle_bound(s, f32::INFINITY);
-            }
-        }
         let (o, d) = rays_in_lanes::<T>(rays);
-        let mut bt = T::load(&bound);
-        let (mut bu, mut bv, mut bslot) = (T::zero(), T::zero(), T::zero());
-        let mut unsure = [0u64; RAYS];
-        for j in 0..self.prims.len() {
-            let r = self.triangle_lanes(j, o, d);
-            let h = r.clear & r.t.gt(T::zero()) & r.t.lt(bt);
-            bt = T::select(h, r.t, bt);
-            bu = T::select(h, r.u, bu);
-            bv = T::select(h, r.v, bv);
-            bslot = T::select(h, T::splat(j as f32), bslot);
-            unsure_of(&mut unsure, T::bits(r.unsure), j);
-        }
-        let (bt, bu, bv, bslot) = (
-            bt.to_array(),
-            bu.to_array(),
-            bv.to_array(),
-            bslot.to_array(),
+        let h = self.closest_lanes(o, d, T::from_bits(u32::MAX), hit);
+        let hits = T::bits(h.hit);
+        let (prim, t, u, v) = (
+            h.prim.to_array(),
+            h.t.to_array(),
+            h.u.to_array(),
+            h.v.to_array(),
         );
-        std::array::from_fn(|k| {
-            let mut best = (usize::MAX, bound[k], 0.0, 0.0);
-            if bt[k] < bound[k] {
-                best = (bslot[k] as usize, bt[k], bu[k], bv[k]);
-            }
-            if unsure[k] != 0 {
-                best = self.settle(unsure[k], bound[k], best, &mut |p, t| hit(k, p, t));
-            }
-            self.result(sphere[k], best)
-        })
+        std::array::from_fn(|k| (hits >> k & 1 != 0).then(|| (prim[k] as usize, t[k], u[k], v[k])))
     }
 
-    /// [`Flat::occluded_rays`] in the lanes of `T`: a ray is blocked by a sphere, by a
-    /// triangle it clearly hits before its `t_max`, or by a triangle near an edge that its
-    /// own test finds, as in [`Flat::occluded`].
+    /// [`Flat::occluded_rays`] in the lanes of `T` ([`Flat::occluded_lanes`]).
     #[inline(always)]
-    fn blocked_rays<T: Sixteen, F>(
-        &self,
-        rays: &[Ray; RAYS],
-        t_max: &[f32; RAYS],
-        mut hit: F,
-    ) -> u32
+    fn blocked_rays<T: Sixteen, H>(&self, rays: &[Ray; RAYS], t_max: &[f32; RAYS], hit: H) -> u32
     where
-        F: FnMut(usize, usize, f32) -> Option<(f32, f32, f32)>,
+        H: FnMut(&Ray, usize, f32) -> Option<(f32, f32, f32)>,
     {
-        let mut blocked = 0u32;
-        for (k, &t) in t_max.iter().enumerate() {
-            if self
-                .spheres
-                .iter()
-                .any(|&p| hit(k, p as usize, t).is_some())
-            {
-                blocked |= 1 << k;
-            }
-        }
         let (o, d) = rays_in_lanes::<T>(rays);
-        let tm = T::load(t_max);
-        let mut unsure = [0u64; RAYS];
-        for j in 0..self.prims.len() {
-            let r = self.triangle_lanes(j, o, d);
-            blocked |= T::bits(r.clear & r.t.gt(T::zero()) & r.t.lt(tm));
-            unsure_of(&mut unsure, T::bits(r.unsure), j);
-        }
-        for (k, &u) in unsure.iter().enumerate() {
-            if u != 0
-                && blocked >> k & 1 == 0
-                && self.any_unsure(u, t_max[k], &mut |p, t| hit(k, p, t))
-            {
-                blocked |= 1 << k;
-            }
-        }
-        blocked
-    }
-
-    /// Triangle `slot` against the rays in the lanes of `T` ([`intersect_lanes_edges`]).
-    #[inline(always)]
-    fn triangle_lanes<T: Sixteen>(&self, slot: usize, o: V3<T>, d: V3<T>) -> LaneHits<T> {
-        let (p0, e1, e2) = self.blocks[slot / LANES].triangle(slot % LANES);
-        intersect_lanes_edges(V3::splat(p0), V3::splat(e1), V3::splat(e2), o, d)
+        T::bits(self.occluded_lanes(o, d, T::load(t_max), T::from_bits(u32::MAX), hit))
     }
 
     /// Whether any of the triangles' lanes near an edge (bit `16·block + lane` of
@@ -582,15 +531,6 @@ fn rays_in_lanes<T: Sixteen>(rays: &[Ray; RAYS]) -> (V3<T>, V3<T>) {
     (V3::new(o0, o1, o2), V3::new(d0, d1, d2))
 }
 
-/// Slot `slot` added to the unsure slots of each ray of `lanes` (bit k for ray k).
-#[inline(always)]
-fn unsure_of(unsure: &mut [u64; RAYS], mut lanes: u32, slot: usize) {
-    while lanes != 0 {
-        unsure[lanes.trailing_zeros() as usize] |= 1 << slot;
-        lanes &= lanes - 1;
-    }
-}
-
 /// The widest kernel the CPU runs, if any.
 fn detect() -> Option<Kernel> {
     [Kernel::Avx512, Kernel::Avx]
@@ -621,6 +561,18 @@ mod tests {
             }
         }
         best
+    }
+
+    /// The flat set of `prims` with kernel `k`.
+    fn flat_of(prims: &[Prim], k: Kernel) -> Flat {
+        let (mut triangles, mut spheres) = (Vec::new(), Vec::new());
+        for (i, p) in prims.iter().enumerate() {
+            match *p {
+                Prim::Tri(t) => triangles.push((i as u32, t)),
+                Prim::Ball(s) => spheres.push((i as u32, s)),
+            }
+        }
+        Flat::with_kernel(&triangles, &spheres, k).unwrap()
     }
 
     fn test(p: &Prim, ray: &Ray, t_max: f32) -> Option<(f32, f32, f32)> {
@@ -672,22 +624,11 @@ mod tests {
             for (slot, &which) in order.iter().enumerate() {
                 prims.insert(2 * slot, [sphere, big, edge][which]);
             }
-            let triangles: Vec<(u32, Triangle)> = prims
-                .iter()
-                .enumerate()
-                .filter_map(|(i, p)| match p {
-                    Prim::Tri(t) => Some((i as u32, *t)),
-                    Prim::Ball(_) => None,
-                })
-                .collect();
-            let spheres: Vec<u32> = (0..prims.len() as u32)
-                .filter(|&i| matches!(prims[i as usize], Prim::Ball(_)))
-                .collect();
             for k in [Kernel::Avx512, Kernel::Avx]
                 .into_iter()
                 .filter(|k| k.available())
             {
-                let f = Flat::with_kernel(&triangles, spheres.clone(), k).unwrap();
+                let f = flat_of(&prims, k);
                 for t_max in [f32::INFINITY, 2.0, 1.0f32.next_up(), 1.0] {
                     let hit = |i: usize, t: f32| test(&prims[i], &ray, t);
                     let got = f.intersect(&ray, t_max, hit).map(|h| (h.0, h.1));
@@ -702,6 +643,14 @@ mod tests {
                     });
                     assert_eq!(got, want, "{k:?}, order {order:?}, t_max {t_max}");
                     assert_eq!(f.occluded(&ray, t_max, hit), t_max > 1.0);
+                    // The same in lanes (`rays.rs`), each lane's ray the same.
+                    let find = |ray: &Ray, i: usize, t: f32| test(&prims[i], ray, t);
+                    let blocked = f.occluded_rays(&[ray; RAYS], &[t_max; RAYS], find);
+                    assert_eq!(blocked, if t_max > 1.0 { 0xffff } else { 0 });
+                    if t_max == f32::INFINITY {
+                        let lanes = f.intersect_rays(&[ray; RAYS], find);
+                        assert!(lanes.iter().all(|h| h.map(|h| (h.0, h.1)) == want), "{k:?}");
+                    }
                 }
             }
         }
@@ -780,21 +729,11 @@ mod tests {
                     }),
                 );
             }
-            let triangles: Vec<(u32, Triangle)> = prims
-                .iter()
-                .enumerate()
-                .filter_map(|(i, p)| match p {
-                    Prim::Tri(t) => Some((i as u32, *t)),
-                    Prim::Ball(_) => None,
-                })
-                .collect();
-            let spheres: Vec<u32> = (0..prims.len() as u32)
-                .filter(|&i| matches!(prims[i as usize], Prim::Ball(_)))
-                .collect();
-            let sets: Vec<Flat> = kernels
-                .iter()
-                .map(|&k| Flat::with_kernel(&triangles, spheres.clone(), k).unwrap())
-                .collect();
+            let sets: Vec<Flat> = kernels.iter().map(|&k| flat_of(&prims, k)).collect();
+            let key = |h: Option<(usize, f32, f32, f32)>| {
+                h.map(|(i, t, u, v)| (i, t.to_bits(), u.to_bits(), v.to_bits()))
+            };
+            let mut batch = Vec::new();
             for ray_case in 0..200 {
                 let aim = tris[(r() * tris.len() as f32) as usize];
                 let (a, b) = (r(), r());
@@ -832,9 +771,6 @@ mod tests {
                     f32::INFINITY
                 };
                 let want = reference(&prims, &ray, t_max);
-                let key = |h: Option<(usize, f32, f32, f32)>| {
-                    h.map(|(i, t, u, v)| (i, t.to_bits(), u.to_bits(), v.to_bits()))
-                };
                 if let Some((i, t, ..)) = want {
                     hits += 1;
                     ties += prims[i + 1..]
@@ -860,6 +796,23 @@ mod tests {
                         occluded,
                         "{k:?}, case {case}, ray {ray_case}"
                     );
+                }
+                batch.push((ray, t_max));
+            }
+            // Sixteen rays at a time, in the lanes (`rays.rs`): the same answers.
+            for rays in batch.chunks_exact(RAYS) {
+                let t_max: [f32; RAYS] = std::array::from_fn(|k| rays[k].1);
+                let rays: [Ray; RAYS] = std::array::from_fn(|k| rays[k].0);
+                let find = |ray: &Ray, i: usize, t: f32| test(&prims[i], ray, t);
+                for (f, k) in sets.iter().zip(&kernels) {
+                    let got = f.intersect_rays(&rays, find);
+                    let blocked = f.occluded_rays(&rays, &t_max, find);
+                    for (j, ray) in rays.iter().enumerate() {
+                        let want = reference(&prims, ray, f32::INFINITY);
+                        assert_eq!(key(got[j]), key(want), "{k:?}, case {case}, lane {j}");
+                        let occluded = prims.iter().any(|p| test(p, ray, t_max[j]).is_some());
+                        assert_eq!(blocked >> j & 1 != 0, occluded, "{k:?}, case {case}");
+                    }
                 }
             }
         }

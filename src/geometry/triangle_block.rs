@@ -50,13 +50,6 @@ impl TriangleBlock {
         b
     }
 
-    /// Lane `lane`'s triangle: its first vertex and its two edges.
-    #[inline(always)]
-    pub fn triangle(&self, lane: usize) -> ([f32; 3], [f32; 3], [f32; 3]) {
-        let at = |a: &[[f32; LANES]; 3]| [a[0][lane], a[1][lane], a[2][lane]];
-        (at(&self.p0), at(&self.e1), at(&self.e2))
-    }
-
     /// The block against the ray (`o`, `d`: its origin and direction in every lane) in
     /// the lanes of `T` ([`Sixteen`]: one AVX-512 register, or two AVX ones),
     /// [`intersect_lanes_edges`]: the lanes hit in (0, `t_max`), the lanes near an edge (to

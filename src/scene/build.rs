@@ -282,9 +282,9 @@ impl Scene {
         times.mark("reorder");
         #[cfg(target_arch = "x86_64")]
         let flat = match single_rays {
-            SingleRays::Auto => flat(&tris, &positions),
+            SingleRays::Auto => flat(&tris, &positions, &spheres),
             SingleRays::Bvh => None,
-            SingleRays::Flat(k) => flat_with(&tris, &positions, Some(k)),
+            SingleRays::Flat(k) => flat_with(&tris, &positions, &spheres, Some(k)),
         }
         .filter(|_| !masked);
         #[cfg(not(target_arch = "x86_64"))]
@@ -372,12 +372,16 @@ fn mesh_lights(
 /// The brute-force set of a small scene's primitives `tris` (in BVH order), if it is small
 /// enough and the CPU has AVX ([`crate::accel::flat`]).
 #[cfg(target_arch = "x86_64")]
-fn flat(tris: &[[u32; 3]], positions: &[glam::Vec3]) -> Option<Box<crate::accel::flat::Flat>> {
+fn flat(
+    tris: &[[u32; 3]],
+    positions: &[glam::Vec3],
+    spheres: &[Sphere],
+) -> Option<Box<crate::accel::flat::Flat>> {
     use crate::accel::flat::{FLAT_MAX_SPHERES, FLAT_MAX_TRIANGLES};
     if tris.len() > FLAT_MAX_TRIANGLES + FLAT_MAX_SPHERES {
         return None;
     }
-    flat_with(tris, positions, None)
+    flat_with(tris, positions, spheres, None)
 }
 
 /// The flat set of `tris` with `kernel` (whatever the size, up to the set's capacity of
@@ -387,12 +391,17 @@ fn flat(tris: &[[u32; 3]], positions: &[glam::Vec3]) -> Option<Box<crate::accel:
 fn flat_with(
     tris: &[[u32; 3]],
     positions: &[glam::Vec3],
+    spheres: &[Sphere],
     kernel: Option<crate::accel::flat::Kernel>,
 ) -> Option<Box<crate::accel::flat::Flat>> {
     use crate::accel::flat::Flat;
     let vertex = |i: u32| Vec3A::from(positions[i as usize]);
-    let (spheres, triangles): (Vec<_>, Vec<_>) =
+    let (balls, triangles): (Vec<_>, Vec<_>) =
         (0..tris.len() as u32).partition(|&i| tris[i as usize][0] == SPHERE);
+    let balls: Vec<(u32, Sphere)> = balls
+        .into_iter()
+        .map(|i| (i, spheres[tris[i as usize][1] as usize]))
+        .collect();
     let triangles: Vec<(u32, Triangle)> = triangles
         .into_iter()
         .map(|i| {
@@ -404,8 +413,8 @@ fn flat_with(
         return None;
     }
     match kernel {
-        Some(k) => Flat::with_kernel(&triangles, spheres, k),
-        None => Flat::new(&triangles, spheres),
+        Some(k) => Flat::with_kernel(&triangles, &balls, k),
+        None => Flat::new(&triangles, &balls),
     }
     .map(Box::new)
 }

@@ -84,7 +84,7 @@ impl Scene {
             let first = active.trailing_zeros() as usize;
             let rays: [Ray; PACKET] =
                 std::array::from_fn(|l| pk.ray(if active >> l & 1 != 0 { l } else { first }));
-            let hits = f.intersect_rays(&rays, |k, i, t| self.hit(&rays[k], i, t));
+            let hits = f.intersect_rays(&rays, |ray, i, t| self.hit(ray, i, t));
             for l in lanes_of(active) {
                 if let Some((i, t, u, v)) = hits[l] {
                     (best[l], found) = ((i, u, v, t), found | 1 << l);

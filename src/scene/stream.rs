@@ -198,7 +198,7 @@ impl Scene {
             let mut os = out.chunks_exact_mut(RAYS);
             for (r, o) in (&mut rs).zip(&mut os) {
                 let r: &[Ray; RAYS] = r.try_into().expect("a chunk of RAYS");
-                let hits = f.intersect_rays(r, |k, i, t| self.hit(&r[k], i, t));
+                let hits = f.intersect_rays(r, |ray, i, t| self.hit(ray, i, t));
                 for (k, (ray, o)) in r.iter().zip(o.iter_mut()).enumerate() {
                     self.interaction_into(ray, hits[k].map(|(i, t, u, v)| (i, u, v, t)), o);
                 }
@@ -228,7 +228,7 @@ impl Scene {
             for ((r, t), o) in (&mut rs).zip(&mut ts).zip(&mut os) {
                 let r: &[Ray; RAYS] = r.try_into().expect("a chunk of RAYS");
                 let t: &[f32; RAYS] = t.try_into().expect("a chunk of RAYS");
-                let blocked = f.occluded_rays(r, t, |k, i, t| self.hit(&r[k], i, t));
+                let blocked = f.occluded_rays(r, t, |ray, i, t| self.hit(ray, i, t));
                 for (k, o) in o.iter_mut().enumerate() {
                     *o = blocked >> k & 1 != 0
                         || (self.instances.as_ref()).is_some_and(|inst| inst.occluded(&r[k], t[k]));

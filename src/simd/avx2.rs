@@ -191,6 +191,24 @@ impl Sixteen for F {
     fn bits(m: M) -> u32 {
         F8::bits(m.0[0]) | F8::bits(m.0[1]) << 8
     }
+    /// All ones in the lanes whose bit is set.
+    #[inline(always)]
+    fn from_bits(bits: u32) -> M {
+        M(both!(h => unsafe {
+            let each = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+            let b = _mm256_set1_epi32(((bits >> (8 * h)) & 0xff) as i32);
+            M8(_mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(b, each), each)))
+        }))
+    }
+    #[inline(always)]
+    fn next_up(self) -> F {
+        F(both!(h => unsafe {
+            F8(_mm256_castsi256_ps(_mm256_add_epi32(
+                _mm256_castps_si256(self.0[h].0),
+                _mm256_set1_epi32(1),
+            )))
+        }))
+    }
     #[inline(always)]
     fn iota(first: f32) -> F {
         let f = unsafe { _mm256_set1_ps(first) };

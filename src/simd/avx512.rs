@@ -181,6 +181,19 @@ impl Sixteen for F {
         m.into()
     }
     #[inline(always)]
+    fn from_bits(bits: u32) -> M {
+        bits as M
+    }
+    #[inline(always)]
+    fn next_up(self) -> F {
+        unsafe {
+            F(_mm512_castsi512_ps(_mm512_add_epi32(
+                _mm512_castps_si512(self.0),
+                _mm512_set1_epi32(1),
+            )))
+        }
+    }
+    #[inline(always)]
     fn iota(first: f32) -> F {
         let i = unsafe {
             _mm512_setr_ps(

@@ -2,7 +2,7 @@
 //! function that runs them compiled for AVX-512F, AVX-512DQ and BMI2.
 //!
 //! The code of the lanes (`bsdf.rs`, `lanes.rs`, `nee.rs`, `path.rs`, `rng.rs`,
-//! `trace.rs`, declared in `backend.rs`) is written once and compiled twice, here and in
+//! declared in `backend.rs`) is written once and compiled twice, here and in
 //! [`super::avx2`], each time over that backend's `simd` and with its target features
 //! (`lanes_fn!`), so that the intrinsics inline into it.
 

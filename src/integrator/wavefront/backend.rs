@@ -18,8 +18,6 @@ mod nee;
 mod path;
 #[path = "rng.rs"]
 mod rng;
-#[path = "trace.rs"]
-mod trace;
 
 use lanes::{Lanes, POOL};
 

@@ -19,13 +19,13 @@
 //! The hits come one of two ways ([`Trace`]). Where the path tracer itself traces single rays
 //! by brute force (`accel::flat`: at most 64 triangles and 4 spheres) and the triangles carry
 //! no vertex normals, the lanes test all sixteen rays against each primitive in turn
-//! ([`trace`]), the transpose of `accel::flat`, and look up shading data by primitive in
-//! tables of 64. Everywhere else the lanes' rays go to the scene's own queries: the camera
-//! rays, which share the eye, in packets of sixteen (`Scene::intersect_packet`), the others
-//! of all groups in one call (`Scene::intersect_many`), both with `Scene::intersect`'s
-//! answers (the BVH, instances, masks), and the lanes take each hit's point and normals from its
-//! `Interaction`, with the shading data by material; the shadow rays go to
-//! `Scene::occluded_many` likewise.
+//! (`Flat::closest_lanes`: the brute force's own rules, in lanes) and look up shading data
+//! by primitive in tables of 64. Everywhere else the lanes' rays go to the scene's own
+//! queries: the camera rays, which share the eye, in packets of sixteen
+//! (`Scene::intersect_packet`), the others of all groups in one call
+//! (`Scene::intersect_many`), both with `Scene::intersect`'s answers (the BVH, instances,
+//! masks), and the lanes take each hit's point and normals from its `Interaction`, with the
+//! shading data by material; the shadow rays go to `Scene::occluded_many` likewise.
 //!
 //! Each lane computes exactly what `path::li` computes for its camera sample: the same
 //! numbers from the same sampler ([`rng`]), the same hits, and the same shading maths, which
@@ -68,6 +68,7 @@
 mod avx2;
 mod avx512;
 
+use crate::accel::flat::Flat;
 use crate::camera::Camera;
 use crate::film::PixelSums;
 use crate::integrator::{IntegratorKind, RussianRoulette};
@@ -146,8 +147,8 @@ pub struct Wavefront<'a> {
     /// With [`Trace::Scene`], each material's flags (`KIND`, `TWO_SIDED`; `EMITTER` comes
     /// from the hit's light), colour and η, by material index.
     materials: Vec<Shading>,
-    tris: Vec<Tri>,
-    balls: Vec<Ball>,
+    /// With [`Trace::Lanes`], the scene's brute-force set, which the lanes trace.
+    flat: Option<&'a Flat>,
     /// Triangles: vertices and unit geometric normal (also the shading normal: no vertex
     /// normals here). Spheres: centre (in `p0`) and radius.
     p0: [[f32; 64]; 3],
@@ -463,25 +464,6 @@ fn place_coatings(materials: &mut [Shading]) -> Vec<f32> {
     all
 }
 
-/// A triangle's first vertex and edges `p1 − p0`, `p2 − p0` (as `Triangle::intersect`
-/// subtracts them), and its primitive index.
-#[derive(Clone, Copy, Debug)]
-pub struct Tri {
-    pub p0: [f32; 3],
-    pub e1: [f32; 3],
-    pub e2: [f32; 3],
-    pub prim: u32,
-}
-
-/// A sphere: its centre, its radius squared (as `Sphere::intersect` computes it) and its
-/// primitive index.
-#[derive(Clone, Copy, Debug)]
-pub struct Ball {
-    pub center: [f32; 3],
-    pub r2: f32,
-    pub prim: u32,
-}
-
 /// The scene's one light, as `Lights::sample` and `Lights::pdf` read it.
 #[derive(Clone, Copy)]
 struct Light {
@@ -527,8 +509,7 @@ impl<'a> Wavefront<'a> {
             scene,
             trace: Trace::Scene,
             materials,
-            tris: Vec::new(),
-            balls: Vec::new(),
+            flat: None,
             p0: [[0.0; 64]; 3],
             p1: [[0.0; 64]; 3],
             p2: [[0.0; 64]; 3],
@@ -566,8 +547,7 @@ impl<'a> Wavefront<'a> {
         };
         if w.fill_tables() {
             w.trace = Trace::Lanes;
-        } else {
-            (w.tris, w.balls) = (Vec::new(), Vec::new());
+            w.flat = scene.flat.as_deref();
         }
         Some(w)
     }
@@ -620,11 +600,6 @@ impl<'a> Wavefront<'a> {
                 }
                 self.radius[j] = sphere.radius;
                 self.flags[j] = flags;
-                self.balls.push(Ball {
-                    center: sphere.center.into(),
-                    r2: sphere.radius * sphere.radius,
-                    prim: j as u32,
-                });
                 continue;
             }
             if meta & META_EMITTER != 0 {
@@ -632,8 +607,7 @@ impl<'a> Wavefront<'a> {
             }
             self.flags[j] = flags;
             let tri = scene.triangle(idx);
-            // As `Triangle::intersect` and `Scene::interaction` compute them.
-            let (e1, e2) = (tri.p1 - tri.p0, tri.p2 - tri.p0);
+            // As `Scene::interaction` computes it.
             let ng = tri.normal_unnormalized().normalize();
             for c in 0..3 {
                 self.p0[c][j] = tri.p0[c];
@@ -641,12 +615,6 @@ impl<'a> Wavefront<'a> {
                 self.p2[c][j] = tri.p2[c];
                 self.ng[c][j] = ng[c];
             }
-            self.tris.push(Tri {
-                p0: tri.p0.into(),
-                e1: e1.into(),
-                e2: e2.into(),
-                prim: j as u32,
-            });
         }
         true
     }

@@ -6,7 +6,8 @@ use super::bsdf;
 use super::nee::Vertex;
 use super::rng::LaneSampler;
 use super::simd::{F, M, U, V3};
-use super::{trace, Bits, LaneMask, Lanes, Trace, Wavefront, POOL};
+use super::{Bits, LaneMask, Lanes, Trace, Wavefront, POOL};
+use crate::accel::flat::{Flat, Hits};
 use crate::scene::{Interaction, META_MATERIAL};
 use super::bsdf::Microfacets;
 use super::general::{At, General};
@@ -47,22 +48,31 @@ impl Wavefront<'_> {
     /// The lanes' hits by brute force ([`Trace::Lanes`]).
     ///
     /// # Safety
-    /// The CPU must have the backend's features (`trace::closest`).
+    /// The CPU must have the backend's features (`Flat::closest_lanes`).
     #[inline(always)]
     unsafe fn surface_lanes(&self, o: V3, d: V3, active: M) -> Surface {
-        let h = trace::closest(self.scene, &self.tris, &self.balls, o, d, active);
-        let (p, p_err, ng) = self.hit_point(&h, o, d);
+        let scene = self.scene;
+        let flat = self.flat();
+        let h = flat.closest_lanes(o, d, active, |ray, p, t| scene.hit(ray, p, t));
+        let prim = U::of_f32(h.prim);
+        let (p, p_err, ng) = self.hit_point(flat, &h, prim, o, d);
         Surface {
             hit: h.hit,
             p,
             p_err,
             ng,
             ns: ng,
-            flags: U::lookup64(&self.flags, h.prim),
-            colour: V3::lookup64(&self.colour, h.prim),
-            eta: F::lookup64(&self.eta, h.prim),
-            prim: h.prim,
+            flags: U::lookup64(&self.flags, prim),
+            colour: V3::lookup64(&self.colour, prim),
+            eta: F::lookup64(&self.eta, prim),
+            prim,
         }
+    }
+
+    /// The scene's brute-force set, which [`Trace::Lanes`] traces.
+    #[inline(always)]
+    fn flat(&self) -> &Flat {
+        self.flat.expect("the lanes trace only scenes traced by brute force")
     }
 
     /// The rough conductors at the lanes' hits `sf` (`hits` with [`Trace::Scene`]), read
@@ -234,11 +244,11 @@ impl Wavefront<'_> {
         }
     }
 
-    /// The hit points of `h`: `Scene::interaction`'s point, error bound and unit normal, for
-    /// a triangle (`Triangle::point`) or a sphere (`Sphere::surface_point`).
+    /// The hit points of `h` (primitives `prim`) in `flat`: `Scene::interaction`'s point,
+    /// error bound and unit normal, for a triangle (`Triangle::point`) or a sphere
+    /// (`Sphere::surface_point`).
     #[inline(always)]
-    fn hit_point(&self, h: &trace::Hits, o: V3, d: V3) -> (V3, V3, V3) {
-        let prim = h.prim;
+    fn hit_point(&self, flat: &Flat, h: &Hits<F>, prim: U, o: V3, d: V3) -> (V3, V3, V3) {
         let (p0, p1, p2) = (
             V3::lookup64(&self.p0, prim),
             V3::lookup64(&self.p1, prim),
@@ -246,7 +256,7 @@ impl Wavefront<'_> {
         );
         let (tp, t_err) = barycentric_point(p0, p1, p2, h.u, h.v);
         let tn = V3::lookup64(&self.ng, prim);
-        if self.balls.is_empty() {
+        if !flat.has_spheres() {
             return (tp, t_err, tn);
         }
         // Spheres: the hit reprojected onto the surface (p0 holds the centre).
@@ -561,7 +571,7 @@ impl Wavefront<'_> {
     /// sixteen at a time against every primitive ([`Trace::Lanes`]).
     ///
     /// # Safety
-    /// The CPU must have the backend's features (`trace::occluded`).
+    /// The CPU must have the backend's features (`Flat::occluded_lanes`).
     #[inline(always)]
     unsafe fn occluded_lanes<const ROOM: usize>(
         &self,
@@ -570,6 +580,7 @@ impl Wavefront<'_> {
         t_max: &[f32; ROOM],
         n: usize,
     ) -> u64 {
+        let (scene, flat) = (self.scene, self.flat());
         let mut blocked = 0u64;
         for first in (0..n).step_by(16) {
             let lanes = M::from_bits(if n - first >= 16 {
@@ -582,15 +593,9 @@ impl Wavefront<'_> {
                 y: F::load_at(&a[1], first),
                 z: F::load_at(&a[2], first),
             };
-            let b = trace::occluded(
-                self.scene,
-                &self.tris,
-                &self.balls,
-                v(o),
-                v(d),
-                F::load_at(t_max, first),
-                lanes,
-            );
+            let b = flat.occluded_lanes(v(o), v(d), F::load_at(t_max, first), lanes, |ray, p, t| {
+                scene.hit(ray, p, t)
+            });
             blocked |= (b.bits() as u64) << first;
         }
         blocked

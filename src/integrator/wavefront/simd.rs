@@ -40,16 +40,6 @@ impl F {
         // |x| < ∞ is false for ∞ and NaN.
         unsafe { _mm512_cmp_ps_mask::<_CMP_LT_OQ>(self.abs().0, _mm512_set1_ps(f32::INFINITY)) }
     }
-    /// `f32::next_up` of positive finite numbers: the next float up (one more in the bits).
-    #[inline(always)]
-    pub fn next_up(self) -> F {
-        unsafe {
-            F(_mm512_castsi512_ps(_mm512_add_epi32(
-                _mm512_castps_si512(self.0),
-                _mm512_set1_epi32(1),
-            )))
-        }
-    }
     /// `a[at..at + 16]`.
     #[inline(always)]
     pub fn load_at(a: &[f32], at: usize) -> F {
@@ -146,6 +136,11 @@ impl U {
     #[inline(always)]
     pub fn to_f32(self) -> F {
         F(unsafe { _mm512_cvtepu32_ps(self.0) })
+    }
+    /// The whole numbers of `f`'s lanes (below 2^31), rounded toward zero.
+    #[inline(always)]
+    pub fn of_f32(f: F) -> U {
+        U(unsafe { _mm512_cvttps_epi32(f.0) })
     }
 }
 

@@ -48,14 +48,9 @@ impl LaneMask for M {
                 as u16
         }
     }
-    /// All ones in the lanes whose bit is set.
     #[inline(always)]
     fn from_bits(m: u16) -> M {
-        M(both!(h => unsafe {
-            let bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
-            let b = _mm256_set1_epi32(((m >> (8 * h)) & 0xff) as i32);
-            M8(_mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(b, bits), bits)))
-        }))
+        <F as crate::simd::Sixteen>::from_bits(m.into())
     }
     #[inline(always)]
     fn any(self) -> bool {
@@ -73,16 +68,6 @@ impl F {
     pub fn is_finite(self) -> M {
         // |x| < ∞ is false for ∞ and NaN.
         self.abs().lt(F::splat(f32::INFINITY))
-    }
-    /// `f32::next_up` of positive finite numbers: the next float up (one more in the bits).
-    #[inline(always)]
-    pub fn next_up(self) -> F {
-        F(both!(h => unsafe {
-            F8(_mm256_castsi256_ps(_mm256_add_epi32(
-                _mm256_castps_si256(self.0[h].0),
-                _mm256_set1_epi32(1),
-            )))
-        }))
     }
     /// `a[at..at + 16]`.
     #[inline(always)]
@@ -187,6 +172,11 @@ impl U {
     #[inline(always)]
     pub fn to_f32(self) -> F {
         F(both!(h => F8(unsafe { _mm256_cvtepi32_ps(self.0[h]) })))
+    }
+    /// The whole numbers of `f`'s lanes (below 2^31), rounded toward zero.
+    #[inline(always)]
+    pub fn of_f32(f: F) -> U {
+        U(both!(h => unsafe { _mm256_cvttps_epi32(f.0[h].0) }))
     }
 }
 
