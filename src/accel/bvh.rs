@@ -601,31 +601,17 @@ fn interior<K: Kind>(
     bounds: &Aabb,
     split: Split,
 ) -> Sub {
-    let Split {
-        mid,
-        wl,
-        l: (lb, lc),
-        r: (rb, rc),
-    } = split;
-    let w = order.len();
-    // (The weight on the left, not the references, lays out the nodes and the order.)
-    let (sl, wl) = (slots_of(wl), prims_of(wl));
-    let (head, rest) = nodes.split_first_mut().unwrap();
-    head.write(inner(bounds, 1 + sl, w));
-    let (left, right) = refs.split_at_mut(mid);
-    let (ln, rn) = rest.split_at_mut(sl);
-    let (lo, ro) = order.split_at_mut(wl);
-    let d = depth + 1;
-    let (a, b) = if wl.min(w - wl) >= PARALLEL_MIN {
-        rayon::join(
-            || build_node(kind, ln, lo, left, first, d, lb, lc),
-            || build_node(kind, rn, ro, right, first + wl, d, rb, rc),
+    let (head, [l, r]) = fused::children(nodes, order, refs, first, depth, bounds, split);
+    // (Not a closure: each child is built on its own thread.)
+    fn build<K: Kind>(kind: &K, (nodes, at, refs, order, _): fused::Child) -> Sub {
+        build_node(
+            kind, nodes, order, refs, at.first, at.depth, at.bounds, at.cbounds,
         )
+    }
+    let (a, b) = if l.3.len().min(r.3.len()) >= PARALLEL_MIN {
+        rayon::join(|| build(kind, l), || build(kind, r))
     } else {
-        (
-            build_node(kind, ln, lo, left, first, d, lb, lc),
-            build_node(kind, rn, ro, right, first + wl, d, rb, rc),
-        )
+        (build(kind, l), build(kind, r))
     };
     finish(head, a.join(b))
 }

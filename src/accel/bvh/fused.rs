@@ -147,11 +147,11 @@ pub(super) fn build<K: Kind>(
 /// Where a subtree lies and what its root holds: its first primitive's position in the
 /// order, its depth, and the bounds of its references and of their doubled centroids.
 #[derive(Clone, Copy)]
-struct Root {
-    first: usize,
-    depth: usize,
-    bounds: Aabb,
-    cbounds: Aabb,
+pub(super) struct Root {
+    pub(super) first: usize,
+    pub(super) depth: usize,
+    pub(super) bounds: Aabb,
+    pub(super) cbounds: Aabb,
 }
 
 /// The first stage: writes the top of the binary tree over `refs` into `nodes` (slots from
@@ -212,7 +212,7 @@ fn top<'a, K: Kind>(
 
 /// One child of a split node: its slots, where it lies and its bounds, its references and
 /// its part of the order, and its slots' offset from the left child's first.
-type Child<'n, 'a> = (
+pub(super) type Child<'n, 'a> = (
     &'n mut [MaybeUninit<BvhNode>],
     Root,
     &'a mut [PrimRef],
@@ -223,7 +223,7 @@ type Child<'n, 'a> = (
 /// Writes the inner node that `split` makes of `nodes[0]` (over `refs` and `order`), and
 /// returns it with its children's parts.
 #[allow(clippy::too_many_arguments)]
-fn children<'n, 'a>(
+pub(super) fn children<'n, 'a>(
     nodes: &'n mut [MaybeUninit<BvhNode>],
     order: &'a mut [u32],
     refs: &'a mut [PrimRef],
@@ -239,6 +239,7 @@ fn children<'n, 'a>(
         r: (rb, rc),
     } = split;
     let w = order.len();
+    // (The weight on the left, not the references, lays out the nodes and the order.)
     let (sl, wl) = (slots_of(wl), prims_of(wl));
     let (head, rest) = nodes.split_first_mut().unwrap();
     head.write(inner(bounds, 1 + sl, w));
