@@ -23,6 +23,7 @@ use crate::geometry::triangle::{intersect_lanes_edges, LaneHits};
 use crate::geometry::{Ray, Triangle};
 use crate::simd::{Float, Sixteen, Vector3, V3};
 use glam::Vec3A;
+use std::mem::MaybeUninit;
 
 /// A sphere as the lanes test it: its centre, its radius squared (as `Sphere::intersect`
 /// computes it) and its primitive index.
@@ -85,10 +86,12 @@ pub struct Hits<T: Float> {
     pub v: T,
 }
 
-/// The (lanes, slot) pairs left to the primitives' own test, at most one entry a slot.
+/// The (lanes, slot) pairs left to the primitives' own test, at most one entry a slot. The
+/// list is left uninitialised: a batch rarely has any, and zeroing it for every batch took
+/// 0.3 % of a Cornell box's instructions (callgrind).
 struct Unsure {
     n: usize,
-    list: [(u32, u8); FLAT_MAX_SLOTS],
+    list: [MaybeUninit<(u16, u8)>; FLAT_MAX_SLOTS],
 }
 
 impl Unsure {
@@ -96,7 +99,7 @@ impl Unsure {
     fn new() -> Unsure {
         Unsure {
             n: 0,
-            list: [(0, 0); FLAT_MAX_SLOTS],
+            list: [const { MaybeUninit::uninit() }; FLAT_MAX_SLOTS],
         }
     }
 
@@ -104,9 +107,18 @@ impl Unsure {
     #[inline(always)]
     fn add(&mut self, lanes: u32, slot: usize) {
         if lanes != 0 {
-            self.list[self.n] = (lanes, slot as u8);
+            self.list[self.n].write((lanes as u16, slot as u8));
             self.n += 1;
         }
+    }
+
+    /// The pairs added, as (lanes, slot).
+    fn pairs(&self) -> impl Iterator<Item = (u32, usize)> + '_ {
+        // SAFETY: `add` wrote the first `n` entries.
+        self.list[..self.n].iter().map(|e| {
+            let (lanes, slot) = unsafe { e.assume_init() };
+            (u32::from(lanes), usize::from(slot))
+        })
     }
 }
 
@@ -267,8 +279,8 @@ impl Flat {
     ) where
         H: FnMut(&Ray, usize, f32) -> Option<(f32, f32, f32)>,
     {
-        for &(lanes, j) in &unsure.list[..unsure.n] {
-            let p = self.prims[j as usize];
+        for (lanes, j) in unsure.pairs() {
+            let p = self.prims[j];
             for l in crate::simd::lanes_of(lanes) {
                 let Some((t, u, v)) = hit(&rays.ray(l), p as usize, bound[l]) else {
                     continue;
@@ -297,8 +309,8 @@ impl Flat {
         H: FnMut(&Ray, usize, f32) -> Option<(f32, f32, f32)>,
     {
         let mut more = 0;
-        for &(lanes, j) in &unsure.list[..unsure.n] {
-            let p = self.prims[j as usize] as usize;
+        for (lanes, j) in unsure.pairs() {
+            let p = self.prims[j] as usize;
             for l in crate::simd::lanes_of(lanes & !blocked) {
                 if hit(&rays.ray(l), p, t_max[l]).is_some() {
                     more |= 1 << l;
