@@ -602,7 +602,7 @@ fn interior<K: Kind>(
     split: Split,
 ) -> Sub {
     let (head, [l, r]) = fused::children(nodes, order, refs, first, depth, bounds, split);
-    // (Not a closure: each child is built on its own thread.)
+    // A child as `build_node` takes it.
     fn build<K: Kind>(kind: &K, (nodes, at, refs, order, _): fused::Child) -> Sub {
         build_node(
             kind, nodes, order, refs, at.first, at.depth, at.bounds, at.cbounds,
