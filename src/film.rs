@@ -155,10 +155,11 @@ pub struct PixelSums {
 impl PixelSums {
     #[inline(always)]
     pub fn add(&mut self, l: Color) {
-        for c in 0..3 {
-            // Equal to fixed_sum(l[c] as f64) and fixed_sq((l[c] as f64)²), without floats.
-            self.sum[c] = self.sum[c].wrapping_add(fixed_from_f32(l[c], SUM_FRAC_BITS));
-            self.sum_sq[c] = self.sum_sq[c].wrapping_add(fixed_sq_from_f32(l[c], SQ_FRAC_BITS));
+        // (An array, not `l[c]`: where the loop stays a loop, Vec3's index is a match.)
+        for (c, v) in l.to_array().into_iter().enumerate() {
+            // Equal to fixed_sum(v as f64) and fixed_sq((v as f64)²), without floats.
+            self.sum[c] = self.sum[c].wrapping_add(fixed_from_f32(v, SUM_FRAC_BITS));
+            self.sum_sq[c] = self.sum_sq[c].wrapping_add(fixed_sq_from_f32(v, SQ_FRAC_BITS));
         }
         self.count += 1;
     }

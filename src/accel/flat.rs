@@ -520,9 +520,11 @@ pub const RAYS: usize = 16;
 fn rays_in_lanes<T: Sixteen>(rays: &[Ray; RAYS]) -> (V3<T>, V3<T>) {
     let (mut o, mut d) = ([[0f32; RAYS]; 3], [[0f32; RAYS]; 3]);
     for (k, ray) in rays.iter().enumerate() {
+        // (Arrays: a vector's index with a variable is a match.)
+        let (ro, rd) = (ray.o.to_array(), ray.d.to_array());
         for a in 0..3 {
-            o[a][k] = ray.o[a];
-            d[a][k] = ray.d[a];
+            o[a][k] = ro[a];
+            d[a][k] = rd[a];
         }
     }
     // (Not a closure: a closure is compiled without its caller's target features.)

@@ -102,7 +102,7 @@ impl PhotonMap {
         let mid = lo + (hi - lo) / 2;
         let ph = &self.photons[mid];
         let axis = ph.axis();
-        let d = q[axis] - ph.p[axis];
+        let d = q.to_array()[axis] - ph.p[axis];
         let (near, far) = if d < 0.0 {
             ((lo, mid), (mid + 1, hi))
         } else {
@@ -145,7 +145,7 @@ impl PhotonMap {
             let mid = lo + (hi - lo) / 2;
             let ph = &self.photons[mid];
             let axis = ph.axis();
-            let d = q[axis] - ph.p[axis];
+            let d = q.to_array()[axis] - ph.p[axis];
             let d2 = (ph.pos() - q).length_squared();
             if d2 < r2 {
                 f(ph, d2);

@@ -130,8 +130,8 @@ mod tests {
                 t_max: [0.0; PACKET],
             };
             for (l, r) in chunk.iter().enumerate() {
-                for c in 0..3 {
-                    pk.d[c][l] = r.d[c];
+                for (c, v) in r.d.to_array().into_iter().enumerate() {
+                    pk.d[c][l] = v;
                 }
                 pk.t_max[l] = 1.1;
             }

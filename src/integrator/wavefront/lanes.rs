@@ -298,8 +298,9 @@ impl Wavefront<'_> {
                     }
                     None => cam.generate_ray(x, y, u),
                 };
+                let (ro, rd) = (ray.o.to_array(), ray.d.to_array());
                 for a in 0..3 {
-                    (o[a][l], d[a][l]) = (ray.o[a], ray.d[a]);
+                    (o[a][l], d[a][l]) = (ro[a], rd[a]);
                 }
             }
             (V3::load(&o), V3::load(&d))

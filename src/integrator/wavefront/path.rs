@@ -222,9 +222,12 @@ impl Wavefront<'_> {
             let sh = &self.materials[si.material as usize];
             let material = &self.scene.materials[si.material as usize];
             let c = sh.colour_at(material, &self.scene.textures, si.uv);
+            // (Arrays, not `si.p[a]`: where the loop stays a loop, a vector's index is a
+            // match.)
+            let [sp, se, sg, sn] = [si.p, si.p_err, si.ng, si.ns].map(|v| v.to_array());
             for a in 0..3 {
-                (p[a][l], p_err[a][l]) = (si.p[a], si.p_err[a]);
-                (ng[a][l], ns[a][l]) = (si.ng[a], si.ns[a]);
+                (p[a][l], p_err[a][l]) = (sp[a], se[a]);
+                (ng[a][l], ns[a][l]) = (sg[a], sn[a]);
                 colour[a][l] = c[a];
             }
             let emits = si.light != crate::scene::NO_LIGHT;
