@@ -383,6 +383,30 @@ mod tests {
         }
     }
 
+    /// A sample's channels go to their own sums: red to `sum[0]`, green to `sum[1]`, blue to
+    /// `sum[2]`, their squares likewise, and each sample counts once.
+    #[test]
+    fn pixel_sums_keep_the_channels_apart() {
+        let samples = [
+            [0.25f32, 3.0, 1e-3],
+            [0.5, -2.0, 7.0],
+            [1e-30, 0.0, 65504.0],
+        ];
+        let mut s = PixelSums::default();
+        for [r, g, b] in samples {
+            s.add(Color::new(r, g, b));
+        }
+        for c in 0..3 {
+            let sum: i128 = samples.iter().map(|v| fixed_sum(v[c] as f64)).sum();
+            let sq: i128 = samples
+                .iter()
+                .map(|v| fixed_sq(v[c] as f64 * v[c] as f64))
+                .sum();
+            assert_eq!((s.sum[c], s.sum_sq[c]), (sum, sq), "channel {c}");
+        }
+        assert_eq!(s.count, 3);
+    }
+
     /// Splats added by workers in any order, and films added in any order, give the same
     /// bits; the image is each pixel's mean plus its splats over the paths traced.
     #[test]
