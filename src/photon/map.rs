@@ -102,6 +102,7 @@ impl PhotonMap {
         let mid = lo + (hi - lo) / 2;
         let ph = &self.photons[mid];
         let axis = ph.axis();
+        // (Through an array: Vec3A's index by a variable is a match, a branch a node.)
         let d = q.to_array()[axis] - ph.p[axis];
         let (near, far) = if d < 0.0 {
             ((lo, mid), (mid + 1, hi))
