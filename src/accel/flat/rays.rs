@@ -106,6 +106,7 @@ impl Unsure {
     /// The lanes `lanes` near an edge of triangle `slot`, if any.
     #[inline(always)]
     fn add(&mut self, lanes: u32, slot: usize) {
+        const { assert!(RAYS <= 16, "a pair's lanes are kept in 16 bits") };
         if lanes != 0 {
             self.list[self.n].write((lanes as u16, slot as u8));
             self.n += 1;
